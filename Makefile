@@ -1,0 +1,47 @@
+# Entry points. `make demo` and `make test` each install what is missing (Debian 12, as root),
+# configure, build and run; nothing else is needed on a fresh machine.
+BUILD ?= build
+ASAN_BUILD ?= build-asan
+JOBS ?= $(shell nproc)
+PREFIX ?= /usr/local
+CMAKE_FLAGS ?=
+
+.PHONY: setup configure build demo test sanitize install package-check clean
+
+setup:
+	@bash scripts/setup.sh
+
+configure: setup
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	@mkdir -p $(BUILD)/demo
+	$(BUILD)/bin/lidarsurf simulate --scene demo -o $(BUILD)/demo/scan.bin
+	$(BUILD)/bin/lidarsurf reconstruct $(BUILD)/demo/scan.bin -o $(BUILD)/demo/mesh.ply
+	@echo "demo mesh: $(BUILD)/demo/mesh.ply (open it in MeshLab or CloudCompare; colour by 'level' for k')"
+
+test: build
+	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+# The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (second build directory).
+sanitize: setup
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_BENCH=OFF
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS)
+
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
+
+# Installs into a scratch prefix and builds a consumer with find_package(lidarsurf).
+package-check: build
+	rm -rf $(BUILD)/pkg-prefix $(BUILD)/pkg-consumer
+	cmake --install $(BUILD) --prefix $(BUILD)/pkg-prefix
+	cmake -S tests/package -B $(BUILD)/pkg-consumer -DCMAKE_PREFIX_PATH=$(CURDIR)/$(BUILD)/pkg-prefix
+	cmake --build $(BUILD)/pkg-consumer
+	$(BUILD)/pkg-consumer/consumer
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD)

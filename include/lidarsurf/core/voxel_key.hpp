@@ -1,0 +1,45 @@
+#pragma once
+// Integer lattice coordinates shared by voxels and grid vertices, with a hash for sparse maps.
+#include <cstdint>
+#include <functional>
+
+#include <Eigen/Core>
+
+namespace lidarsurf {
+
+using VoxelKey = Eigen::Vector3i;
+
+/// Lattice indices must stay within +-2^20 so that three of them pack into 64 bits.
+inline constexpr std::int32_t kMaxLatticeIndex = (1 << 20) - 1;
+
+/// Packs a key (each component within +-kMaxLatticeIndex) into one 64-bit word.
+inline std::uint64_t pack_key(const VoxelKey& k) {
+    constexpr std::uint64_t mask = (std::uint64_t{1} << 21) - 1;
+    return (static_cast<std::uint64_t>(k.x()) & mask) |
+           ((static_cast<std::uint64_t>(k.y()) & mask) << 21) |
+           ((static_cast<std::uint64_t>(k.z()) & mask) << 42);
+}
+
+/// splitmix64 finaliser: spreads packed keys over the hash table.
+inline std::uint64_t mix64(std::uint64_t x) {
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    x ^= x >> 31;
+    return x;
+}
+
+struct VoxelKeyHash {
+    std::size_t operator()(const VoxelKey& k) const noexcept {
+        return static_cast<std::size_t>(mix64(pack_key(k)));
+    }
+};
+
+/// Floor division for negative lattice indices (C++ '/' truncates toward zero).
+inline std::int32_t floor_div(std::int32_t a, std::int32_t b) {
+    std::int32_t q = a / b;
+    return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,27 @@
+#pragma once
+// Mesh writers: PLY (binary little endian by default, ascii on request) and OBJ. The PLY keeps
+// the per-vertex normal, level k' (uchar "level") and confidence (float "confidence").
+#include <filesystem>
+#include <ostream>
+#include <string_view>
+
+#include "lidarsurf/mesh/mesh.hpp"
+
+namespace lidarsurf {
+
+enum class MeshFormat { Auto, PlyBinary, PlyAscii, Obj };
+
+/// "auto", "ply", "ply-ascii", "obj"; throws InvalidArgument otherwise.
+MeshFormat parse_mesh_format(std::string_view name);
+
+/// Writes to `path` atomically (temporary + rename). Auto: ".obj" gives OBJ, anything else PLY.
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format = MeshFormat::Auto);
+
+/// Stream writers (no atomicity; used by write_mesh and tests).
+void write_ply(const Mesh& mesh, std::ostream& out, bool binary);
+void write_obj(const Mesh& mesh, std::ostream& out);
+
+/// Reads a triangle mesh written as PLY (vertex x, y, z and a face list) or OBJ (v and f lines).
+Mesh read_mesh(const std::filesystem::path& path);
+
+}  // namespace lidarsurf

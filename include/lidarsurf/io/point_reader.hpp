@@ -1,0 +1,32 @@
+#pragma once
+// Point cloud readers: KITTI .bin, PLY (ascii / binary little and big endian), PCD v0.7 (ascii,
+// binary, binary_compressed) and XYZ/CSV text. Every reader bounds its allocations by the file's
+// size and throws FormatError (malformed) or IoError (cannot open) with the file name.
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "lidarsurf/io/point_cloud.hpp"
+
+namespace lidarsurf {
+
+enum class PointFormat { Auto, KittiBin, Ply, Pcd, Text };
+
+/// "auto", "bin", "ply", "pcd", "xyz" (also "csv", "txt"); throws InvalidArgument otherwise.
+PointFormat parse_point_format(std::string_view name);
+
+struct PointReadOptions {
+    PointFormat format = PointFormat::Auto;  ///< Auto: chosen by the file extension.
+    int bin_fields = 4;  ///< float32 values per point in .bin files (KITTI: 4, nuScenes: 5).
+};
+
+/// Reads the x, y, z of every point. Non-finite points are kept (see drop_non_finite).
+PointCloud read_points(const std::filesystem::path& path, const PointReadOptions& options = {});
+
+/// Parsers on an in-memory buffer (used by read_points and by the fuzzers). `name` is for messages.
+PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name);
+PointCloud parse_ply_points(std::string_view data, const std::string& name);
+PointCloud parse_pcd_points(std::string_view data, const std::string& name);
+PointCloud parse_text_points(std::string_view data, const std::string& name);
+
+}  // namespace lidarsurf

@@ -1,0 +1,17 @@
+#pragma once
+// Marching cubes (Lorensen & Cline 1987) over the cubes of the lattice whose 8 corners are defined.
+//
+// Instead of the 256-case table, each cube's patch is built from its faces: on every face the
+// sign changes are joined into oriented segments (face ambiguities resolved by the asymptotic
+// decider, which depends only on that face's four values, so neighbouring cubes agree and the
+// surface is closed), the segments are chained into loops, and each loop is fanned into
+// triangles. Vertices are keyed by lattice edge, so shared vertices are welded. Triangles face
+// the positive side of the field (the sensor side of the TSDF).
+#include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/surface/tsdf_field.hpp"
+
+namespace lidarsurf {
+
+Mesh extract_mesh(const TsdfField& field);
+
+}  // namespace lidarsurf

@@ -1,0 +1,23 @@
+#pragma once
+// Indexed triangle mesh with the per-vertex attributes of the reconstruction.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace lidarsurf {
+
+struct Mesh {
+    std::vector<Eigen::Vector3d> vertices;               ///< world coordinates, metres
+    std::vector<std::array<std::uint32_t, 3>> triangles; ///< counter-clockwise seen from the front
+    std::vector<Eigen::Vector3f> normals;                ///< optional, per vertex (empty or |vertices|)
+    std::vector<std::uint8_t> levels;                    ///< optional, k' per vertex
+    std::vector<float> confidence;                       ///< optional, Eq. (3) value per vertex
+
+    bool empty() const { return triangles.empty(); }
+    /// Throws InvalidInput if attribute sizes or triangle indices are inconsistent.
+    void check() const;
+};
+
+}  // namespace lidarsurf

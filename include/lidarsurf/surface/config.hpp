@@ -1,0 +1,51 @@
+#pragma once
+// The one configuration of the reconstruction. Every field carries the paper's default
+// (Sec. IV-A: alpha = 0.2 m, tau = 0.2, N_min = 10, k_max = 5); the CLI and the Python bindings
+// fill this same struct, and validate() is the single place parameters are checked.
+#include <string>
+#include <string_view>
+
+namespace lidarsurf {
+
+/// Neighbourhood strategy (Sec. IV-B).
+enum class Mode {
+    AdaptiveGaussian,  ///< AN+GC: smallest k <= k_max satisfying Eq. (1) and Eq. (3). Default.
+    Adaptive,          ///< AN: smallest k <= k_max satisfying Eq. (1).
+    ConstantGaussian,  ///< CN+GC: k' = k, kept only if Eq. (1) and Eq. (3) hold.
+    Constant,          ///< CN: k' = k, kept only if Eq. (1) holds.
+};
+
+/// "an+gc", "an", "cn+gc", "cn".
+std::string_view to_string(Mode mode);
+/// Parses the names above (case-insensitive); throws InvalidArgument on anything else.
+Mode parse_mode(std::string_view name);
+
+struct ReconstructionConfig {
+    double voxel_size = 0.2;   ///< alpha, metres (Sec. III-A).
+    double tau = 0.2;          ///< Gaussian confidence threshold of Eq. (3).
+    int n_min = 10;            ///< N_min of Eq. (1): minimum points in H^k for a plane.
+    int k_max = 5;             ///< Largest neighbourhood level of the adaptive modes.
+    int k = 5;                 ///< Level of the constant modes (CN, CN+GC).
+    Mode mode = Mode::AdaptiveGaussian;
+    /// Degenerate covariance guard: a neighbourhood with lambda2 < min_planarity * lambda1 is a
+    /// line (typically a single scan ring), not a plane, and fails like Eq. (1) (docs/method.md).
+    double min_planarity = 0.05;
+    /// TSDF truncation, in voxels. The paper names a *truncated* SDF without giving the distance;
+    /// a corner of a cube that the surface crosses is within the cube diagonal (sqrt(3) voxels) of
+    /// it, so vertices with |TSDF| beyond that are left undefined (docs/method.md). 0 disables.
+    double truncation_voxels = 1.7320508075688772;
+    int threads = 0;           ///< Worker threads; 0 = all cores.
+
+    /// Largest level this configuration evaluates (k_max or k).
+    int max_level() const;
+    bool adaptive() const { return mode == Mode::AdaptiveGaussian || mode == Mode::Adaptive; }
+    bool gaussian() const { return mode == Mode::AdaptiveGaussian || mode == Mode::ConstantGaussian; }
+
+    /// Throws InvalidArgument naming the first bad field.
+    void validate() const;
+};
+
+/// Upper bound on levels: H^k has (2k)^3 voxels, so k = 32 already means 262,144 per vertex.
+inline constexpr int kMaxNeighbourhoodLevel = 32;
+
+}  // namespace lidarsurf

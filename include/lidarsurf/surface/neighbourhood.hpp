@@ -1,0 +1,16 @@
+#pragma once
+// Neighbourhoods of a grid vertex (Sec. III-B1). Vertex v (integer lattice point, world position
+// origin + alpha*v) is the shared corner of voxels v-1 and v along each axis, so
+// H^k(v) = the (2k)^3 voxels with indices in [v-k, v+k-1]^3; H^1 are its 8 adjacent voxels.
+#include "lidarsurf/core/voxel_grid.hpp"
+
+namespace lidarsurf {
+
+/// Merged statistics |H|, H_mu, H_sigma of H^k(v) (k >= 1).
+VoxelStats merge_neighbourhood(const VoxelGrid& grid, const VoxelKey& vertex, int k);
+
+/// Grows `acc` from the statistics of H^{k-1}(v) to those of H^k(v) by merging only the shell
+/// H^k \ H^{k-1} (for k = 1, acc must be empty). Same set as merge_neighbourhood, less work.
+void grow_neighbourhood(const VoxelGrid& grid, const VoxelKey& vertex, int k, VoxelStats& acc);
+
+}  // namespace lidarsurf

@@ -1,0 +1,29 @@
+#pragma once
+// Per-vertex choice of the neighbourhood level k' (Sec. III-C1 and the modes of Sec. IV-B) and
+// the TSDF value of Eq. (4). This is the straightforward reference evaluation of one vertex.
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "lidarsurf/core/voxel_grid.hpp"
+#include "lidarsurf/surface/config.hpp"
+
+namespace lidarsurf {
+
+struct VertexSample {
+    bool defined = false;    ///< false: no level satisfied the mode's conditions.
+    float tsdf = 0;          ///< n^{k'} . (v - H^{k'}_mu), Eq. (4), metres.
+    std::uint8_t level = 0;  ///< k'.
+    float confidence = 0;    ///< N_PDF at w^{k'} (Eq. 3), also computed for the non-GC modes.
+    Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< n^{k'}.
+};
+
+/// Evaluates vertex `v` of `grid` with `config` (already validated). `sensor_local` is the sensor
+/// position in the grid's local frame.
+VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor_local);
+
+/// Covariances with lambda2 below this (relative to alpha^2) are treated as degenerate.
+double degenerate_lambda2(double voxel_size);
+
+}  // namespace lidarsurf

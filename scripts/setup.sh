@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages lidarsurf needs to build and test. Skips what is present.
+# Run as root (or with sudo available). Idempotent.
+set -euo pipefail
+
+PKGS=(
+  build-essential cmake pkg-config
+  libeigen3-dev        # linear algebra, 3x3 eigen solver
+  libtbb-dev           # oneTBB: parallel vertex evaluation
+  libnanoflann-dev     # kd-tree (IMLS, evaluation)
+  libcli11-dev         # command-line parsing
+  liblzf-dev           # PCD binary_compressed (LZF)
+  libgtest-dev         # unit tests
+  libbenchmark-dev     # micro-benchmarks
+)
+
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "setup: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

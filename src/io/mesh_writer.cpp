@@ -1,0 +1,154 @@
+#include "lidarsurf/io/mesh_writer.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+#include <iomanip>
+#include <string>
+
+#include "byte_reader.hpp"
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/io/atomic_file.hpp"
+#include "ply_format.hpp"
+
+namespace lidarsurf {
+
+MeshFormat parse_mesh_format(std::string_view name) {
+    std::string s(name);
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (s == "auto") return MeshFormat::Auto;
+    if (s == "ply" || s == "ply-binary") return MeshFormat::PlyBinary;
+    if (s == "ply-ascii") return MeshFormat::PlyAscii;
+    if (s == "obj") return MeshFormat::Obj;
+    throw InvalidArgument("unknown mesh format '" + std::string(name) + "' (expected ply, ply-ascii or obj)");
+}
+
+namespace {
+
+template <typename T>
+void put(std::ostream& out, T v) {
+    char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));  // PLY binary_little_endian; the supported targets are little endian
+    out.write(b, sizeof(T));
+}
+
+// Float32 keeps ~1e-3 m at 1e4 m; beyond that, vertices are written as double.
+bool needs_double(const Mesh& mesh) {
+    for (const auto& v : mesh.vertices)
+        if (v.cwiseAbs().maxCoeff() > 1e4) return true;
+    return false;
+}
+
+}  // namespace
+
+void write_ply(const Mesh& mesh, std::ostream& out, bool binary) {
+    mesh.check();
+    const bool dbl = needs_double(mesh);
+    const bool has_n = !mesh.normals.empty(), has_k = !mesh.levels.empty(), has_c = !mesh.confidence.empty();
+    out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
+        << "comment lidarsurf mesh; level = neighbourhood level k', confidence = Eq. (3) value\n"
+        << "element vertex " << mesh.vertices.size() << "\n";
+    const char* t = dbl ? "double" : "float";
+    out << "property " << t << " x\nproperty " << t << " y\nproperty " << t << " z\n";
+    if (has_n) out << "property float nx\nproperty float ny\nproperty float nz\n";
+    if (has_k) out << "property uchar level\n";
+    if (has_c) out << "property float confidence\n";
+    out << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    if (!binary) out << std::setprecision(dbl ? 15 : 9);
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        const auto& v = mesh.vertices[i];
+        if (binary) {
+            for (int a = 0; a < 3; ++a) dbl ? put<double>(out, v[a]) : put<float>(out, static_cast<float>(v[a]));
+            if (has_n) for (int a = 0; a < 3; ++a) put<float>(out, mesh.normals[i][a]);
+            if (has_k) put<std::uint8_t>(out, mesh.levels[i]);
+            if (has_c) put<float>(out, mesh.confidence[i]);
+        } else {
+            out << v.x() << ' ' << v.y() << ' ' << v.z();
+            if (has_n) out << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
+            if (has_k) out << ' ' << static_cast<int>(mesh.levels[i]);
+            if (has_c) out << ' ' << mesh.confidence[i];
+            out << '\n';
+        }
+    }
+    for (const auto& tri : mesh.triangles) {
+        if (binary) {
+            put<std::uint8_t>(out, 3);
+            for (auto i : tri) put<std::int32_t>(out, static_cast<std::int32_t>(i));
+        } else {
+            out << "3 " << tri[0] << ' ' << tri[1] << ' ' << tri[2] << '\n';
+        }
+    }
+}
+
+void write_obj(const Mesh& mesh, std::ostream& out) {
+    mesh.check();
+    out << "# lidarsurf mesh\n" << std::setprecision(needs_double(mesh) ? 15 : 9);
+    for (const auto& v : mesh.vertices) out << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    for (const auto& n : mesh.normals) out << "vn " << n.x() << ' ' << n.y() << ' ' << n.z() << '\n';
+    const bool has_n = !mesh.normals.empty();
+    for (const auto& t : mesh.triangles) {
+        out << 'f';
+        for (auto i : t) {
+            out << ' ' << i + 1;
+            if (has_n) out << "//" << i + 1;
+        }
+        out << '\n';
+    }
+}
+
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format) {
+    if (format == MeshFormat::Auto) {
+        std::string ext = path.extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+        format = ext == ".obj" ? MeshFormat::Obj : MeshFormat::PlyBinary;
+    }
+    mesh.check();
+    AtomicFile file(path);
+    if (format == MeshFormat::Obj) write_obj(mesh, file.stream());
+    else write_ply(mesh, file.stream(), format == MeshFormat::PlyBinary);
+    file.commit();
+}
+
+Mesh read_mesh(const std::filesystem::path& path) {
+    const std::string name = path.string();
+    const std::string data = detail::read_file(name);
+    Mesh mesh;
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext != ".obj") {
+        auto content = detail::parse_ply(data, name, true);
+        mesh.vertices = std::move(content.vertices);
+        mesh.triangles = std::move(content.triangles);
+        return mesh;
+    }
+    std::string_view rest = data;
+    std::size_t line_no = 0;
+    while (!rest.empty()) {
+        const std::string_view line = detail::next_line(rest);
+        ++line_no;
+        detail::Tokens tk(line);
+        std::string_view word, tok;
+        if (!tk.next(word)) continue;
+        if (word == "v") {
+            Eigen::Vector3d p;
+            for (int a = 0; a < 3; ++a)
+                if (!tk.next(tok) || !detail::parse_double(tok, p[a])) throw FormatError(name + ": line " + std::to_string(line_no) + ": bad vertex");
+            mesh.vertices.push_back(p);
+        } else if (word == "f") {
+            std::vector<std::uint32_t> idx;
+            while (tk.next(tok)) {
+                double v;
+                if (!detail::parse_double(tok.substr(0, tok.find('/')), v) || v == 0 || v != static_cast<long long>(v))
+                    throw FormatError(name + ": line " + std::to_string(line_no) + ": bad face index");
+                const double i = v > 0 ? v - 1 : static_cast<double>(mesh.vertices.size()) + v;
+                if (i < 0 || i >= static_cast<double>(mesh.vertices.size())) throw FormatError(name + ": line " + std::to_string(line_no) + ": face index out of range");
+                idx.push_back(static_cast<std::uint32_t>(i));
+            }
+            for (std::size_t j = 1; j + 1 < idx.size(); ++j) mesh.triangles.push_back({idx[0], idx[j], idx[j + 1]});
+        }
+    }
+    if (mesh.vertices.empty()) throw FormatError(name + ": OBJ file has no vertices");
+    return mesh;
+}
+
+}  // namespace lidarsurf

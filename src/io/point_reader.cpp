@@ -1,0 +1,307 @@
+#include "lidarsurf/io/point_reader.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include <lzf.h>
+
+#include "byte_reader.hpp"
+#include "lidarsurf/core/errors.hpp"
+#include "ply_format.hpp"
+
+namespace lidarsurf {
+
+std::size_t drop_non_finite(PointCloud& cloud) {
+    const std::size_t before = cloud.points.size();
+    std::erase_if(cloud.points, [](const Eigen::Vector3d& p) { return !p.allFinite(); });
+    return before - cloud.points.size();
+}
+
+namespace detail {
+std::string read_file(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path + ": cannot open for reading");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) throw IoError(path + ": read error");
+    return std::move(ss).str();
+}
+}  // namespace detail
+
+using namespace detail;
+
+namespace {
+std::string lower(std::string_view s) {
+    std::string r(s);
+    std::transform(r.begin(), r.end(), r.begin(), [](unsigned char c) { return std::tolower(c); });
+    return r;
+}
+}  // namespace
+
+PointFormat parse_point_format(std::string_view name) {
+    const std::string s = lower(name);
+    if (s == "auto") return PointFormat::Auto;
+    if (s == "bin" || s == "kitti") return PointFormat::KittiBin;
+    if (s == "ply") return PointFormat::Ply;
+    if (s == "pcd") return PointFormat::Pcd;
+    if (s == "xyz" || s == "csv" || s == "txt" || s == "text") return PointFormat::Text;
+    throw InvalidArgument("unknown point format '" + std::string(name) + "' (expected auto, bin, ply, pcd, xyz, csv)");
+}
+
+PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name) {
+    if (fields < 3 || fields > 64) throw InvalidArgument("bin fields per point must be in [3, 64]");
+    if (data.empty()) throw FormatError(name + ": file is empty");
+    const std::size_t record = 4 * static_cast<std::size_t>(fields);
+    if (data.size() % record != 0)
+        throw FormatError(name + ": size " + std::to_string(data.size()) + " bytes is not a multiple of " + std::to_string(record) +
+                          " (" + std::to_string(fields) + " float32 per point): truncated, or not a KITTI .bin");
+    PointCloud cloud;
+    const std::size_t n = data.size() / record;
+    cloud.points.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const char* p = data.data() + i * record;
+        cloud.points[i] = {load<float>(p, false), load<float>(p + 4, false), load<float>(p + 8, false)};
+    }
+    return cloud;
+}
+
+PointCloud parse_ply_points(std::string_view data, const std::string& name) {
+    PointCloud cloud;
+    cloud.points = parse_ply(data, name, false).vertices;
+    return cloud;
+}
+
+namespace {
+
+struct PcdField {
+    std::string name;
+    std::size_t size = 4;
+    char type = 'F';
+    std::size_t count = 1;
+    ScalarType scalar() const {
+        if (type == 'F') return size == 8 ? ScalarType::Float64 : ScalarType::Float32;
+        if (type == 'I') return size == 1 ? ScalarType::Int8 : size == 2 ? ScalarType::Int16 : size == 4 ? ScalarType::Int32 : ScalarType::Int64;
+        return size == 1 ? ScalarType::UInt8 : size == 2 ? ScalarType::UInt16 : size == 4 ? ScalarType::UInt32 : ScalarType::UInt64;
+    }
+};
+
+std::uint64_t parse_count(std::string_view tok, const std::string& name, const char* what) {
+    double v;
+    if (!parse_double(tok, v) || v < 0 || v != std::floor(v) || v > 9e15)
+        throw FormatError(name + ": bad PCD " + what + " '" + std::string(tok.substr(0, 32)) + "'");
+    return static_cast<std::uint64_t>(v);
+}
+
+}  // namespace
+
+PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
+    if (data.empty()) throw FormatError(name + ": file is empty");
+    std::vector<PcdField> fields;
+    std::optional<std::uint64_t> width, height, points;
+    std::string encoding;
+    std::string_view rest = data;
+    bool saw_header_line = false;
+    while (!rest.empty() && encoding.empty()) {
+        const std::string_view line = next_line(rest);
+        Tokens tk(line);
+        std::string_view key, tok;
+        if (!tk.next(key) || key.front() == '#') continue;
+        saw_header_line = true;
+        std::vector<std::string_view> vals;
+        while (tk.next(tok)) vals.push_back(tok);
+        if (key == "VERSION") continue;
+        if (key == "FIELDS" || key == "COLUMNS") {
+            fields.clear();
+            for (auto v : vals) fields.push_back({std::string(v)});
+        } else if (key == "SIZE" || key == "TYPE" || key == "COUNT") {
+            if (vals.size() != fields.size()) throw FormatError(name + ": PCD " + std::string(key) + " has " + std::to_string(vals.size()) + " entries for " + std::to_string(fields.size()) + " fields");
+            for (std::size_t i = 0; i < vals.size(); ++i) {
+                if (key == "TYPE") {
+                    if (vals[i].size() != 1 || std::string_view("FIU").find(vals[i][0]) == std::string_view::npos) throw FormatError(name + ": bad PCD TYPE '" + std::string(vals[i]) + "'");
+                    fields[i].type = vals[i][0];
+                } else {
+                    const auto v = parse_count(vals[i], name, key == "SIZE" ? "SIZE" : "COUNT");
+                    if (key == "SIZE") {
+                        if (v != 1 && v != 2 && v != 4 && v != 8) throw FormatError(name + ": bad PCD SIZE " + std::to_string(v));
+                        fields[i].size = v;
+                    } else {
+                        if (v < 1 || v > 1 << 16) throw FormatError(name + ": bad PCD COUNT " + std::to_string(v));
+                        fields[i].count = v;
+                    }
+                }
+            }
+        } else if (key == "WIDTH" && vals.size() == 1) {
+            width = parse_count(vals[0], name, "WIDTH");
+        } else if (key == "HEIGHT" && vals.size() == 1) {
+            height = parse_count(vals[0], name, "HEIGHT");
+        } else if (key == "POINTS" && vals.size() == 1) {
+            points = parse_count(vals[0], name, "POINTS");
+        } else if (key == "VIEWPOINT") {
+            continue;
+        } else if (key == "DATA" && vals.size() == 1) {
+            encoding = std::string(vals[0]);
+        } else {
+            throw FormatError(name + (saw_header_line && !fields.empty() ? ": unexpected PCD header line '" : ": not a PCD file (line '") + std::string(line.substr(0, 60)) + "')");
+        }
+    }
+    if (encoding.empty()) throw FormatError(name + ": PCD header has no DATA line (not a PCD file, or truncated)");
+    if (fields.empty()) throw FormatError(name + ": PCD header has no FIELDS");
+    for (const auto& f : fields)
+        if (f.type == 'F' && f.size != 4 && f.size != 8) throw FormatError(name + ": PCD float field '" + f.name + "' has size " + std::to_string(f.size));
+    std::uint64_t n = points ? *points : (width && height ? *width * *height : 0);
+    if (!points && !(width && height)) throw FormatError(name + ": PCD header has neither POINTS nor WIDTH and HEIGHT");
+    if (width && height && *width * *height != n) throw FormatError(name + ": PCD POINTS disagrees with WIDTH x HEIGHT");
+
+    int ix = -1, iy = -1, iz = -1;
+    std::size_t record = 0, tokens_per_point = 0;
+    std::vector<std::size_t> offset(fields.size());
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+        offset[i] = record;
+        record += fields[i].size * fields[i].count;
+        tokens_per_point += fields[i].count;
+        if (fields[i].name == "x") ix = static_cast<int>(i);
+        if (fields[i].name == "y") iy = static_cast<int>(i);
+        if (fields[i].name == "z") iz = static_cast<int>(i);
+    }
+    if (ix < 0 || iy < 0 || iz < 0) throw FormatError(name + ": PCD has no x, y, z fields");
+    const int idx[3] = {ix, iy, iz};
+
+    PointCloud cloud;
+    if (encoding == "ascii") {
+        if (n > rest.size() / (2 * tokens_per_point) + 1) throw FormatError(name + ": PCD header claims " + std::to_string(n) + " points, more than the file can hold");
+        cloud.points.reserve(n);
+        for (std::uint64_t r = 0; r < n; ++r) {
+            std::string_view line;
+            do {
+                if (rest.empty()) throw FormatError(name + ": PCD has " + std::to_string(r) + " data lines but the header claims " + std::to_string(n) + " (truncated?)");
+                line = next_line(rest);
+            } while (Tokens(line).rest().find_first_not_of(" \t") == std::string_view::npos);
+            Tokens tk(line);
+            std::vector<double> vals;
+            std::string_view tok;
+            while (tk.next(tok)) {
+                double v;
+                if (!parse_double(tok, v)) throw FormatError(name + ": PCD value '" + std::string(tok.substr(0, 32)) + "' is not a number");
+                vals.push_back(v);
+            }
+            if (vals.size() != tokens_per_point) throw FormatError(name + ": PCD data line " + std::to_string(r + 1) + " has " + std::to_string(vals.size()) + " values, expected " + std::to_string(tokens_per_point));
+            Eigen::Vector3d p;
+            for (int a = 0; a < 3; ++a) {
+                std::size_t t = 0;
+                for (int i = 0; i < idx[a]; ++i) t += fields[static_cast<std::size_t>(i)].count;
+                p[a] = vals[t];
+            }
+            cloud.points.push_back(p);
+        }
+    } else if (encoding == "binary") {
+        if (record == 0 || n > rest.size() / record)
+            throw FormatError(name + ": PCD header claims " + std::to_string(n) + " points of " + std::to_string(record) + " bytes but the data holds " + std::to_string(rest.size()) + " bytes (truncated?)");
+        cloud.points.resize(n);
+        for (std::uint64_t r = 0; r < n; ++r)
+            for (int a = 0; a < 3; ++a) {
+                const auto& f = fields[static_cast<std::size_t>(idx[a])];
+                cloud.points[r][a] = load_scalar(rest.data() + r * record + offset[static_cast<std::size_t>(idx[a])], f.scalar(), false);
+            }
+    } else if (encoding == "binary_compressed") {
+        if (rest.size() < 8) throw FormatError(name + ": PCD binary_compressed data is truncated");
+        const std::uint32_t csize = load<std::uint32_t>(rest.data(), false), usize = load<std::uint32_t>(rest.data() + 4, false);
+        if (csize > rest.size() - 8) throw FormatError(name + ": PCD compressed size " + std::to_string(csize) + " exceeds the file (truncated?)");
+        if (static_cast<std::uint64_t>(usize) != n * record) throw FormatError(name + ": PCD uncompressed size " + std::to_string(usize) + " disagrees with POINTS x record size");
+        // LZF expands at most ~(264/3)x: refuse claims the compressed bytes cannot produce.
+        if (static_cast<std::uint64_t>(usize) > 100ULL * csize + 1024) throw FormatError(name + ": PCD uncompressed size is implausible for its compressed size");
+        std::vector<char> buf(usize);
+        if (usize > 0) {
+            const unsigned got = lzf_decompress(rest.data() + 8, csize, buf.data(), usize);
+            if (got != usize) throw FormatError(name + ": PCD binary_compressed data is corrupt (LZF)");
+        }
+        // Decompressed layout is per field: all points' values of field 0, then field 1, ...
+        std::vector<std::size_t> soa(fields.size());
+        std::size_t acc = 0;
+        for (std::size_t i = 0; i < fields.size(); ++i) { soa[i] = acc; acc += fields[i].size * fields[i].count * n; }
+        cloud.points.resize(n);
+        for (std::uint64_t r = 0; r < n; ++r)
+            for (int a = 0; a < 3; ++a) {
+                const auto i = static_cast<std::size_t>(idx[a]);
+                cloud.points[r][a] = load_scalar(buf.data() + soa[i] + r * fields[i].size * fields[i].count, fields[i].scalar(), false);
+            }
+    } else {
+        throw FormatError(name + ": unknown PCD DATA encoding '" + encoding + "'");
+    }
+    return cloud;
+}
+
+PointCloud parse_text_points(std::string_view data, const std::string& name) {
+    if (data.empty()) throw FormatError(name + ": file is empty");
+    PointCloud cloud;
+    int cx = 0, cy = 1, cz = 2;
+    bool first = true;
+    std::size_t line_no = 0;
+    std::vector<std::string_view> toks;
+    while (!data.empty()) {
+        std::string_view line = next_line(data);
+        ++line_no;
+        toks.clear();
+        // Separators: spaces, tabs, commas and semicolons (runs count as one).
+        std::size_t i = 0;
+        auto is_sep = [](char c) { return c == ',' || c == ';' || c == ' ' || c == '\t'; };
+        while (i < line.size()) {
+            while (i < line.size() && is_sep(line[i])) ++i;
+            std::size_t j = i;
+            while (j < line.size() && !is_sep(line[j])) ++j;
+            if (j > i) toks.push_back(line.substr(i, j - i));
+            i = j;
+        }
+        if (toks.empty() || toks[0].front() == '#' || toks[0].starts_with("//")) continue;
+        double v;
+        if (first && !parse_double(toks[0], v)) {  // header line with column names
+            cx = cy = cz = -1;
+            for (std::size_t c = 0; c < toks.size(); ++c) {
+                const std::string t = lower(toks[c]);
+                if (t == "x" || t == "//x") cx = static_cast<int>(c);
+                if (t == "y") cy = static_cast<int>(c);
+                if (t == "z") cz = static_cast<int>(c);
+            }
+            if (cx < 0 || cy < 0 || cz < 0) throw FormatError(name + ": text header line " + std::to_string(line_no) + " names no x, y, z columns");
+            first = false;
+            continue;
+        }
+        first = false;
+        const int need = std::max({cx, cy, cz}) + 1;
+        if (static_cast<int>(toks.size()) < need) throw FormatError(name + ": line " + std::to_string(line_no) + " has " + std::to_string(toks.size()) + " values, needs " + std::to_string(need));
+        Eigen::Vector3d p;
+        const int col[3] = {cx, cy, cz};
+        for (int a = 0; a < 3; ++a)
+            if (!parse_double(toks[static_cast<std::size_t>(col[a])], p[a]))
+                throw FormatError(name + ": line " + std::to_string(line_no) + ": '" + std::string(toks[static_cast<std::size_t>(col[a])].substr(0, 32)) + "' is not a number");
+        cloud.points.push_back(p);
+    }
+    return cloud;
+}
+
+PointCloud read_points(const std::filesystem::path& path, const PointReadOptions& options) {
+    PointFormat fmt = options.format;
+    if (fmt == PointFormat::Auto) {
+        const std::string ext = lower(path.extension().string());
+        if (ext == ".bin") fmt = PointFormat::KittiBin;
+        else if (ext == ".ply") fmt = PointFormat::Ply;
+        else if (ext == ".pcd") fmt = PointFormat::Pcd;
+        else if (ext == ".xyz" || ext == ".csv" || ext == ".txt" || ext == ".pts") fmt = PointFormat::Text;
+        else throw InvalidArgument(path.string() + ": cannot tell the format from the extension '" + ext + "' (use --format bin|ply|pcd|xyz)");
+    }
+    const std::string name = path.string();
+    const std::string data = read_file(name);
+    switch (fmt) {
+        case PointFormat::KittiBin: return parse_kitti_bin(data, options.bin_fields, name);
+        case PointFormat::Ply: return parse_ply_points(data, name);
+        case PointFormat::Pcd: return parse_pcd_points(data, name);
+        default: return parse_text_points(data, name);
+    }
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,203 @@
+#include "lidarsurf/mesh/marching_cubes.hpp"
+
+#include <array>
+#include <unordered_map>
+
+#include <Eigen/Geometry>
+
+namespace lidarsurf {
+namespace {
+
+// Cube corner c = i + 2j + 4l sits at offset (i, j, l) from the cube's minimum vertex.
+VoxelKey corner_offset(int c) { return {c & 1, (c >> 1) & 1, (c >> 2) & 1}; }
+
+// Corners of each face, counter-clockwise seen from outside the cube (about the outward normal).
+constexpr std::array<std::array<int, 4>, 6> kFaces{{
+    {0, 4, 6, 2},  // -x
+    {1, 3, 7, 5},  // +x
+    {0, 1, 5, 4},  // -y
+    {2, 6, 7, 3},  // +y
+    {0, 2, 3, 1},  // -z
+    {4, 5, 7, 6},  // +z
+}};
+
+// Bit mask of the faces (bit f for kFaces[f]) that contain cube edge e: filled on first use.
+const std::array<std::uint8_t, 12>& edge_faces();
+
+// Local index (0..11) of the cube edge joining corners a and b (adjacent corners).
+int edge_index(int a, int b) {
+    const int lo = a < b ? a : b;
+    const int axis = (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2);
+    const VoxelKey o = corner_offset(lo);
+    const int rest = axis == 0 ? o.y() + 2 * o.z() : (axis == 1 ? o.x() + 2 * o.z() : o.x() + 2 * o.y());
+    return axis * 4 + rest;
+}
+
+const std::array<std::uint8_t, 12>& edge_faces() {
+    static const std::array<std::uint8_t, 12> masks = [] {
+        std::array<std::uint8_t, 12> m{};
+        for (int f = 0; f < 6; ++f)
+            for (int i = 0; i < 4; ++i) m[edge_index(kFaces[f][i], kFaces[f][(i + 1) % 4])] |= std::uint8_t(1u << f);
+        return m;
+    }();
+    return masks;
+}
+
+// Lattice-global identity of a mesh vertex: the edge (min endpoint, axis 0..2) it lies on, or the
+// lattice vertex itself (axis 3) when the field is exactly zero there.
+struct VertexId {
+    VoxelKey base;
+    int axis;
+    bool operator==(const VertexId& o) const { return axis == o.axis && base == o.base; }
+};
+struct VertexIdHash {
+    std::size_t operator()(const VertexId& id) const noexcept {
+        return static_cast<std::size_t>(mix64(pack_key(id.base) ^ (static_cast<std::uint64_t>(id.axis) << 63) ^
+                                              (static_cast<std::uint64_t>(id.axis) * 0x9e3779b97f4a7c15ULL)));
+    }
+};
+
+class MeshBuilder {
+public:
+    explicit MeshBuilder(const TsdfField& field) : field_(field) {}
+
+    void process_cube(const VoxelKey& base) {
+        std::array<const VertexSample*, 8> s{};
+        std::array<bool, 8> neg{};
+        int negatives = 0;
+        for (int c = 0; c < 8; ++c) {
+            s[c] = field_.find(base + corner_offset(c));
+            if (!s[c]) return;  // only cubes whose 8 corners are defined
+            neg[c] = s[c]->tsdf < 0;  // zero counts as positive (outside)
+            negatives += neg[c];
+        }
+        if (negatives == 0 || negatives == 8) return;
+
+        // next[e]: the edge where the surface patch boundary goes after edge e.
+        std::array<int, 12> next;
+        next.fill(-1);
+        std::array<int, 12> edge_a{}, edge_b{};
+        for (const auto& q : kFaces) {
+            int order[4], n_cross = 0;  // crossing positions in CCW order: +1 enter, -1 exit
+            int edges[4];
+            for (int m = 0; m < 4; ++m) {
+                const int a = q[m], b = q[(m + 1) % 4];
+                if (neg[a] == neg[b]) continue;
+                const int e = edge_index(a, b);
+                edge_a[e] = a < b ? a : b;
+                edge_b[e] = a < b ? b : a;
+                edges[n_cross] = e;
+                order[n_cross] = neg[b] ? +1 : -1;  // walking a -> b: entering the negative region?
+                ++n_cross;
+            }
+            if (n_cross == 2) {
+                const int i_enter = order[0] > 0 ? 0 : 1;
+                next[edges[i_enter]] = edges[1 - i_enter];
+            } else if (n_cross == 4) {
+                // Asymptotic decider: value of the bilinear interpolant at its saddle point.
+                const double f0 = s[q[0]]->tsdf, f1 = s[q[1]]->tsdf, f2 = s[q[2]]->tsdf, f3 = s[q[3]]->tsdf;
+                const double saddle = (f0 * f2 - f1 * f3) / (f0 + f2 - f1 - f3);
+                const bool negatives_connected = saddle < 0;
+                for (int p = 0; p < 4; ++p) {
+                    if (order[p] < 0) continue;
+                    const int partner = negatives_connected ? (p + 3) % 4 : (p + 1) % 4;
+                    next[edges[p]] = edges[partner];
+                }
+            }
+        }
+
+        std::array<bool, 12> visited{};
+        std::array<std::uint32_t, 12> loop{};
+        std::array<int, 12> loop_edges{};
+        for (int start = 0; start < 12; ++start) {
+            if (next[start] < 0 || visited[start]) continue;
+            int len = 0;
+            for (int e = start; !visited[e]; e = next[e]) {
+                visited[e] = true;
+                loop_edges[len] = e;
+                loop[len++] = vertex_on_edge(base, edge_a[e], edge_b[e], *s[edge_a[e]], *s[edge_b[e]]);
+            }
+            triangulate_loop(loop, loop_edges, len);
+        }
+    }
+
+    Mesh take() { return std::move(mesh_); }
+
+private:
+    // Fans the loop from a vertex none of whose chords joins two edges of a common cube face.
+    // Such chords cross the cube's interior, so no other cube can produce them, and every mesh edge
+    // is then shared by exactly two triangles (a face segment: this cube and its neighbour; a chord
+    // or a spoke: two triangles of this fan). If every fan has a face chord (rare, complex loops),
+    // the loop is fanned around an added centroid vertex instead.
+    void triangulate_loop(const std::array<std::uint32_t, 12>& loop, const std::array<int, 12>& edges, int len) {
+        const auto& faces = edge_faces();
+        for (int s0 = 0; s0 < len; ++s0) {
+            bool ok = true;
+            for (int j = 2; j + 1 < len && ok; ++j) ok = (faces[edges[s0]] & faces[edges[(s0 + j) % len]]) == 0;
+            if (!ok) continue;
+            for (int j = 1; j + 1 < len; ++j) add_triangle(loop[s0], loop[(s0 + j) % len], loop[(s0 + j + 1) % len]);
+            return;
+        }
+        const auto c = static_cast<std::uint32_t>(mesh_.vertices.size());
+        Eigen::Vector3d p = Eigen::Vector3d::Zero();
+        Eigen::Vector3f n = Eigen::Vector3f::Zero();
+        float conf = 0;
+        for (int i = 0; i < len; ++i) {
+            p += mesh_.vertices[loop[i]];
+            n += mesh_.normals[loop[i]];
+            conf += mesh_.confidence[loop[i]];
+        }
+        mesh_.vertices.push_back(p / len);
+        mesh_.normals.push_back(n.squaredNorm() > 1e-12f ? n.normalized() : mesh_.normals[loop[0]]);
+        mesh_.levels.push_back(mesh_.levels[loop[0]]);
+        mesh_.confidence.push_back(conf / static_cast<float>(len));
+        for (int i = 0; i < len; ++i) add_triangle(c, loop[i], loop[(i + 1) % len]);
+    }
+
+    std::uint32_t vertex_on_edge(const VoxelKey& base, int ca, int cb, const VertexSample& sa, const VertexSample& sb) {
+        const VoxelKey a = base + corner_offset(ca), b = base + corner_offset(cb);
+        const int axis = (ca ^ cb) == 1 ? 0 : ((ca ^ cb) == 2 ? 1 : 2);
+        const double fa = sa.tsdf, fb = sb.tsdf;
+        const double t = fa / (fa - fb);  // fa and fb have opposite signs (or one is zero)
+        VertexId id{a, axis};
+        if (t <= 0) id = {a, 3};
+        else if (t >= 1) id = {b, 3};
+        auto [it, added] = ids_.try_emplace(id, static_cast<std::uint32_t>(mesh_.vertices.size()));
+        if (!added) return it->second;
+
+        const double tc = id.axis == 3 ? (id.base == a ? 0.0 : 1.0) : t;
+        const Eigen::Vector3d pa = a.cast<double>() * field_.voxel_size, pb = b.cast<double>() * field_.voxel_size;
+        mesh_.vertices.push_back(field_.origin + pa + tc * (pb - pa));
+        Eigen::Vector3f n = (1.0f - static_cast<float>(tc)) * sa.normal + static_cast<float>(tc) * sb.normal;
+        if (n.squaredNorm() < 1e-12f) n = tc < 0.5 ? sa.normal : sb.normal;
+        mesh_.normals.push_back(n.normalized());
+        const VertexSample& nearest = tc < 0.5 ? sa : sb;
+        mesh_.levels.push_back(nearest.level);
+        mesh_.confidence.push_back(nearest.confidence);
+        return it->second;
+    }
+
+    void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        if (a == b || b == c || a == c) return;  // collapsed onto a zero-valued lattice vertex
+        const Eigen::Vector3d& pa = mesh_.vertices[a];
+        const double area2 = (mesh_.vertices[b] - pa).cross(mesh_.vertices[c] - pa).norm();
+        if (!(area2 > 1e-12 * field_.voxel_size * field_.voxel_size)) return;  // zero-area
+        mesh_.triangles.push_back({a, b, c});
+    }
+
+    const TsdfField& field_;
+    Mesh mesh_;
+    std::unordered_map<VertexId, std::uint32_t, VertexIdHash> ids_;
+};
+
+}  // namespace
+
+Mesh extract_mesh(const TsdfField& field) {
+    MeshBuilder builder(field);
+    // Every defined vertex is tried as the minimum corner of a cube; sorted keys give a
+    // deterministic vertex and triangle order.
+    for (const VoxelKey& v : field.keys()) builder.process_cube(v);
+    return builder.take();
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,24 @@
+#include "lidarsurf/mesh/mesh.hpp"
+
+#include <string>
+
+#include "lidarsurf/core/errors.hpp"
+
+namespace lidarsurf {
+
+void Mesh::check() const {
+    const std::size_t n = vertices.size();
+    auto attr = [n](std::size_t size, const char* name) {
+        if (size != 0 && size != n)
+            throw InvalidInput(std::string("mesh attribute '") + name + "' has " + std::to_string(size) +
+                               " entries for " + std::to_string(n) + " vertices");
+    };
+    attr(normals.size(), "normals");
+    attr(levels.size(), "levels");
+    attr(confidence.size(), "confidence");
+    for (const auto& t : triangles)
+        for (std::uint32_t i : t)
+            if (i >= n) throw InvalidInput("mesh triangle refers to vertex " + std::to_string(i) + " of " + std::to_string(n));
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,52 @@
+#include "lidarsurf/surface/config.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <string>
+
+#include "lidarsurf/core/errors.hpp"
+
+namespace lidarsurf {
+
+std::string_view to_string(Mode mode) {
+    switch (mode) {
+        case Mode::AdaptiveGaussian: return "an+gc";
+        case Mode::Adaptive: return "an";
+        case Mode::ConstantGaussian: return "cn+gc";
+        case Mode::Constant: return "cn";
+    }
+    return "?";
+}
+
+Mode parse_mode(std::string_view name) {
+    std::string s(name);
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (s == "an+gc") return Mode::AdaptiveGaussian;
+    if (s == "an") return Mode::Adaptive;
+    if (s == "cn+gc") return Mode::ConstantGaussian;
+    if (s == "cn") return Mode::Constant;
+    throw InvalidArgument("unknown mode '" + std::string(name) + "' (expected an+gc, an, cn+gc or cn)");
+}
+
+int ReconstructionConfig::max_level() const { return adaptive() ? k_max : k; }
+
+void ReconstructionConfig::validate() const {
+    auto fail = [](const std::string& m) { throw InvalidArgument(m); };
+    if (!std::isfinite(voxel_size) || voxel_size <= 0) fail("voxel size must be finite and > 0 (got " + std::to_string(voxel_size) + ")");
+    if (voxel_size < 1e-4 || voxel_size > 1e3) fail("voxel size must be within [1e-4, 1e3] m (got " + std::to_string(voxel_size) + ")");
+    if (!std::isfinite(tau) || tau <= 0) fail("tau must be finite and > 0 (got " + std::to_string(tau) + ")");
+    if (n_min < 3) fail("n_min must be >= 3: a plane needs three points (got " + std::to_string(n_min) + ")");
+    const std::string range = "[1, " + std::to_string(kMaxNeighbourhoodLevel) + "]";
+    if (k_max < 1 || k_max > kMaxNeighbourhoodLevel) fail("k_max must be in " + range + " (got " + std::to_string(k_max) + ")");
+    if (k < 1 || k > kMaxNeighbourhoodLevel) fail("k must be in " + range + " (got " + std::to_string(k) + ")");
+    if (!std::isfinite(min_planarity) || min_planarity < 0 || min_planarity >= 1)
+        fail("min_planarity must be in [0, 1) (got " + std::to_string(min_planarity) + ")");
+    if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
+        fail("truncation must be finite and >= 0 voxels (0 disables it; got " + std::to_string(truncation_voxels) + ")");
+    if (truncation_voxels > 0 && truncation_voxels < 0.8660254037844386)
+        fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + std::to_string(truncation_voxels) + ")");
+    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,75 @@
+#pragma once
+// Helpers shared by the tests: brute-force statistics and mesh topology checks.
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <unistd.h>
+
+#include "lidarsurf/mesh/mesh.hpp"
+
+namespace lidarsurf::test {
+
+/// Two-pass mean and population covariance: the oracle for the incremental statistics.
+struct DirectStats {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+};
+inline DirectStats direct_stats(const std::vector<Eigen::Vector3d>& pts) {
+    DirectStats s;
+    for (const auto& p : pts) s.mean += p;
+    s.mean /= static_cast<double>(pts.size());
+    for (const auto& p : pts) s.cov += (p - s.mean) * (p - s.mean).transpose();
+    s.cov /= static_cast<double>(pts.size());
+    return s;
+}
+
+struct Topology {
+    std::size_t boundary_edges = 0;     ///< undirected edges used by one triangle
+    std::size_t nonmanifold_edges = 0;  ///< undirected edges used by three or more
+    std::size_t misoriented_edges = 0;  ///< directed edges used twice (inconsistent winding)
+    long euler = 0;                     ///< V - E + F over referenced vertices
+};
+inline Topology topology(const Mesh& m) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> undirected, directed;
+    std::vector<bool> used(m.vertices.size(), false);
+    for (const auto& t : m.triangles)
+        for (int i = 0; i < 3; ++i) {
+            const auto a = t[i], b = t[(i + 1) % 3];
+            used[a] = true;
+            ++directed[{a, b}];
+            ++undirected[{std::min(a, b), std::max(a, b)}];
+        }
+    Topology topo;
+    for (const auto& [e, n] : undirected) {
+        if (n == 1) ++topo.boundary_edges;
+        if (n > 2) ++topo.nonmanifold_edges;
+    }
+    for (const auto& [e, n] : directed)
+        if (n > 1) ++topo.misoriented_edges;
+    const long v = std::count(used.begin(), used.end(), true);
+    topo.euler = v - static_cast<long>(undirected.size()) + static_cast<long>(m.triangles.size());
+    return topo;
+}
+
+inline Eigen::Vector3d triangle_normal(const Mesh& m, const std::array<std::uint32_t, 3>& t) {
+    return (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]);
+}
+
+/// A fresh empty directory under the system temp dir.
+inline std::filesystem::path temp_dir(const std::string& name) {
+    static int counter = 0;
+    auto dir = std::filesystem::temp_directory_path() /
+               ("lidarsurf_test_" + name + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+}  // namespace lidarsurf::test
