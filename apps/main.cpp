@@ -49,6 +49,14 @@ void refuse_overwriting_input(const fs::path& input, const fs::path& output) {
         throw InvalidArgument("output '" + output.string() + "' is the input file; refusing to overwrite it");
 }
 
+// 2: the user's arguments; 3: the data; 4: the file system.
+int exit_code(const Error& e) {
+    if (dynamic_cast<const InvalidArgument*>(&e)) return 2;
+    if (dynamic_cast<const FormatError*>(&e) || dynamic_cast<const InvalidInput*>(&e)) return 3;
+    if (dynamic_cast<const IoError*>(&e)) return 4;
+    return 1;
+}
+
 struct ReconstructOptions {
     std::string input, output, format = "auto", mesh_format = "auto", origin = "0,0,0", mode = "an+gc";
     int bin_fields = 4;
@@ -141,18 +149,9 @@ int main(int argc, char** argv) {
     try {
         if (*rc) return run_reconstruct(ro, config);
         if (*sc) return run_simulate(scene, sim_out, seed);
-    } catch (const InvalidArgument& e) {
+    } catch (const Error& e) {
         std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
-        return 2;
-    } catch (const FormatError& e) {
-        std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
-        return 3;
-    } catch (const InvalidInput& e) {
-        std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
-        return 3;
-    } catch (const IoError& e) {
-        std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
-        return 4;
+        return exit_code(e);
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "lidarsurf: error: out of memory\n");
         return 1;
