@@ -87,6 +87,14 @@ private:
     std::string_view s_;
 };
 
+/// ASCII lower case (format names, file extensions).
+inline std::string lower(std::string_view s) {
+    std::string r(s);
+    for (char& c : r)
+        if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    return r;
+}
+
 /// Reads a whole file into memory. Throws IoError when it cannot.
 std::string read_file(const std::string& path);
 

@@ -14,8 +14,7 @@
 namespace lidarsurf {
 
 MeshFormat parse_mesh_format(std::string_view name) {
-    std::string s(name);
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+    const std::string s = detail::lower(name);
     if (s == "auto") return MeshFormat::Auto;
     if (s == "ply" || s == "ply-binary") return MeshFormat::PlyBinary;
     if (s == "ply-ascii") return MeshFormat::PlyAscii;
@@ -98,9 +97,7 @@ void write_obj(const Mesh& mesh, std::ostream& out) {
 
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format) {
     if (format == MeshFormat::Auto) {
-        std::string ext = path.extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-        format = ext == ".obj" ? MeshFormat::Obj : MeshFormat::PlyBinary;
+        format = detail::lower(path.extension().string()) == ".obj" ? MeshFormat::Obj : MeshFormat::PlyBinary;
     }
     mesh.check();
     AtomicFile file(path);
@@ -113,9 +110,7 @@ Mesh read_mesh(const std::filesystem::path& path) {
     const std::string name = path.string();
     const std::string data = detail::read_file(name);
     Mesh mesh;
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext != ".obj") {
+    if (detail::lower(path.extension().string()) != ".obj") {
         auto content = detail::parse_ply(data, name, true);
         mesh.vertices = std::move(content.vertices);
         mesh.triangles = std::move(content.triangles);

@@ -36,14 +36,6 @@ std::string read_file(const std::string& path) {
 
 using namespace detail;
 
-namespace {
-std::string lower(std::string_view s) {
-    std::string r(s);
-    std::transform(r.begin(), r.end(), r.begin(), [](unsigned char c) { return std::tolower(c); });
-    return r;
-}
-}  // namespace
-
 PointFormat parse_point_format(std::string_view name) {
     const std::string s = lower(name);
     if (s == "auto") return PointFormat::Auto;

@@ -4,15 +4,14 @@
 #include <cctype>
 #include <cstring>
 
+#include "byte_reader.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 
 namespace lidarsurf {
 
 void write_points(const PointCloud& cloud, const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".ply") {
+    if (detail::lower(path.extension().string()) == ".ply") {
         Mesh m;
         m.vertices = cloud.points;
         write_mesh(m, path, MeshFormat::PlyBinary);
