@@ -99,8 +99,7 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat 
     if (format == MeshFormat::Auto) {
         format = detail::lower(path.extension().string()) == ".obj" ? MeshFormat::Obj : MeshFormat::PlyBinary;
     }
-    mesh.check();
-    AtomicFile file(path);
+    AtomicFile file(path);  // the stream writers check the mesh; a throw removes the temporary
     if (format == MeshFormat::Obj) write_obj(mesh, file.stream());
     else write_ply(mesh, file.stream(), format == MeshFormat::PlyBinary);
     file.commit();

@@ -121,12 +121,11 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
 
     ValueSource src(rest, *enc, name);
     PlyContent out;
-    bool have_vertex = false;
+    bool have_vertex = false, have_faces = false;
     for (const PlyElement& el : elements) {
-        if (have_vertex && !want_faces) break;
+        if (have_vertex && (!want_faces || have_faces)) break;  // everything needed is read
         const bool is_vertex = el.name == "vertex";
         const bool is_face = el.name == "face" && want_faces;
-        if (!is_vertex && !is_face && &el == &elements.back()) break;  // nothing needed after
         // Each record needs at least one byte per property (binary) or two characters (ascii):
         // refuse counts the file cannot hold before allocating anything.
         std::size_t min_record = 0;
@@ -178,6 +177,7 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
             }
             if (is_vertex) out.vertices.push_back(xyz);
         }
+        have_faces = have_faces || is_face;
     }
     if (!have_vertex) throw FormatError(name + ": PLY file has no vertex element");
     for (const auto& t : out.triangles)

@@ -152,9 +152,10 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
 
     int ix = -1, iy = -1, iz = -1;
     std::size_t record = 0, tokens_per_point = 0;
-    std::vector<std::size_t> offset(fields.size());
+    std::vector<std::size_t> offset(fields.size()), token(fields.size());  // byte / ascii token position
     for (std::size_t i = 0; i < fields.size(); ++i) {
         offset[i] = record;
+        token[i] = tokens_per_point;
         record += fields[i].size * fields[i].count;
         tokens_per_point += fields[i].count;
         if (fields[i].name == "x") ix = static_cast<int>(i);
@@ -183,13 +184,8 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
                 vals.push_back(v);
             }
             if (vals.size() != tokens_per_point) throw FormatError(name + ": PCD data line " + std::to_string(r + 1) + " has " + std::to_string(vals.size()) + " values, expected " + std::to_string(tokens_per_point));
-            Eigen::Vector3d p;
-            for (int a = 0; a < 3; ++a) {
-                std::size_t t = 0;
-                for (int i = 0; i < idx[a]; ++i) t += fields[static_cast<std::size_t>(i)].count;
-                p[a] = vals[t];
-            }
-            cloud.points.push_back(p);
+            cloud.points.emplace_back(vals[token[static_cast<std::size_t>(ix)]], vals[token[static_cast<std::size_t>(iy)]],
+                                      vals[token[static_cast<std::size_t>(iz)]]);
         }
     } else if (encoding == "binary") {
         if (record == 0 || n > rest.size() / record)

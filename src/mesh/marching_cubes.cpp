@@ -21,13 +21,16 @@ constexpr std::array<std::array<int, 4>, 6> kFaces{{
     {4, 5, 7, 6},  // +z
 }};
 
+// Axis (0, 1, 2) of the cube edge joining adjacent corners a and b.
+int edge_axis(int a, int b) { return (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2); }
+
 // Bit mask of the faces (bit f for kFaces[f]) that contain cube edge e: filled on first use.
 const std::array<std::uint8_t, 12>& edge_faces();
 
 // Local index (0..11) of the cube edge joining corners a and b (adjacent corners).
 int edge_index(int a, int b) {
     const int lo = a < b ? a : b;
-    const int axis = (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2);
+    const int axis = edge_axis(a, b);
     const VoxelKey o = corner_offset(lo);
     const int rest = axis == 0 ? o.y() + 2 * o.z() : (axis == 1 ? o.x() + 2 * o.z() : o.x() + 2 * o.y());
     return axis * 4 + rest;
@@ -156,7 +159,7 @@ private:
 
     std::uint32_t vertex_on_edge(const VoxelKey& base, int ca, int cb, const VertexSample& sa, const VertexSample& sb) {
         const VoxelKey a = base + corner_offset(ca), b = base + corner_offset(cb);
-        const int axis = (ca ^ cb) == 1 ? 0 : ((ca ^ cb) == 2 ? 1 : 2);
+        const int axis = edge_axis(ca, cb);
         const double fa = sa.tsdf, fb = sb.tsdf;
         const double t = fa / (fa - fb);  // fa and fb have opposite signs (or one is zero)
         VertexId id{a, axis};
