@@ -19,8 +19,9 @@ build: configure
 
 demo: build
 	@mkdir -p $(BUILD)/demo
-	$(BUILD)/bin/lidarsurf simulate --scene demo -o $(BUILD)/demo/scan.bin
+	$(BUILD)/bin/lidarsurf simulate --scene demo -o $(BUILD)/demo/scan.bin --gt $(BUILD)/demo/gt.bin
 	$(BUILD)/bin/lidarsurf reconstruct $(BUILD)/demo/scan.bin -o $(BUILD)/demo/mesh.ply
+	$(BUILD)/bin/lidarsurf evaluate $(BUILD)/demo/mesh.ply $(BUILD)/demo/gt.bin --json $(BUILD)/demo/metrics.json
 	@echo "demo mesh: $(BUILD)/demo/mesh.ply (open it in MeshLab or CloudCompare; colour by 'level' for k')"
 
 test: build

@@ -12,6 +12,14 @@ SensorModel SensorModel::hdl64() {
     return s;
 }
 
+SensorModel SensorModel::ground_truth() {
+    SensorModel s;
+    for (int i = 0; i < 316; ++i) s.elevations_deg.push_back(2.0 - 26.8 * i / 315.0);
+    s.azimuth_step_deg = 0.09;
+    s.range_noise = 0.0;
+    return s;
+}
+
 PointCloud simulate_scan(const AnalyticScene& scene, const SensorModel& sensor, const Eigen::Vector3d& origin,
                          std::uint64_t seed) {
     std::mt19937_64 rng(seed);

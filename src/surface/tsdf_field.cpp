@@ -61,9 +61,6 @@ std::vector<VoxelKey> candidate_vertices(const VoxelGrid& grid, int level) {
 TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
                        TsdfStats* stats) {
     config.validate();
-    TsdfField field;
-    field.voxel_size = grid.voxel_size();
-    field.origin = grid.origin();
     const std::vector<VoxelKey> candidates = candidate_vertices(grid, config.max_level());
     std::vector<VertexSample> samples(candidates.size());
     const Eigen::Vector3d sensor_local = grid.to_local(sensor_world);
@@ -75,6 +72,14 @@ TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config
     // of a cube the surface crosses; it stays undefined so no cube is meshed from it.
     const double truncation = config.truncation_voxels > 0 ? config.truncation_voxels * grid.voxel_size()
                                                            : std::numeric_limits<double>::infinity();
+    return assemble_field(grid, candidates, samples, truncation, stats);
+}
+
+TsdfField assemble_field(const VoxelGrid& grid, const std::vector<VoxelKey>& candidates,
+                         const std::vector<VertexSample>& samples, double truncation, TsdfStats* stats) {
+    TsdfField field;
+    field.voxel_size = grid.voxel_size();
+    field.origin = grid.origin();
     std::size_t defined = 0;
     for (std::size_t i = 0; i < candidates.size(); ++i)
         if (samples[i].defined && std::fabs(samples[i].tsdf) <= truncation) {

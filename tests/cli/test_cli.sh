@@ -15,7 +15,7 @@ expect() {  # expect CODE PATTERN -- command...
         passed=$((passed + 1))
     fi
 }
-"$cli" simulate -o "$dir/scan.bin" >/dev/null || { echo "simulate failed"; exit 1; }
+"$cli" simulate -o "$dir/scan.bin" --gt "$dir/gt.bin" >/dev/null || { echo "simulate failed"; exit 1; }
 expect 0 "triangles" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply"
 [ -s "$dir/mesh.ply" ] || { echo "FAIL: no mesh written"; fail=$((fail + 1)); }
 expect 0 "mode cn" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.obj" --mode cn --k 3
@@ -39,6 +39,21 @@ expect 3 "PLY" -- "$cli" reconstruct "$dir/short.ply" -o "$dir/x.ply"
 printf 'nan nan nan\n' > "$dir/nan.xyz"
 expect 3 "no finite point" -- "$cli" reconstruct "$dir/nan.xyz" -o "$dir/x.ply"
 expect 4 "cannot write" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/nodir/x.ply"
+# IMLS and evaluation.
+expect 0 "imls.*triangles" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/imls.ply" --method imls
+expect 2 "unknown method" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/x.ply" --method poisson
+expect 2 "imls: radius" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/x.ply" --method imls --imls-radius -1
+expect 0 "F-score" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --json "$dir/m.json" --max-range 30
+grep -q '"ae_sym"' "$dir/m.json" || { echo "FAIL: evaluate --json wrote no metrics"; fail=$((fail + 1)); }
+expect 0 "hold-out 0.5.*held out" -- "$cli" evaluate --holdout 0.5 "$dir/scan.bin" --seed 3 --mesh-out "$dir/ho.ply"
+[ -s "$dir/ho.ply" ] || { echo "FAIL: --mesh-out not written"; fail=$((fail + 1)); }
+expect 2 "takes MESH GT" -- "$cli" evaluate "$dir/mesh.ply"
+expect 2 "one scan" -- "$cli" evaluate --holdout 0.5 "$dir/scan.bin" "$dir/gt.bin"
+expect 2 "fraction" -- "$cli" evaluate --holdout 1.5 "$dir/scan.bin"
+expect 2 "threshold" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --threshold 0
+expect 3 "not a PLY" -- "$cli" evaluate "$dir/gt.bin" "$dir/gt.bin"
+expect 4 "cannot open" -- "$cli" evaluate "$dir/mesh.ply" "$dir/nothere.bin"
+expect 2 "refusing" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --json "$dir/gt.bin"
 # A failed run leaves a previous output intact and writes nothing else.
 cp "$dir/mesh.ply" "$dir/keep.ply"
 expect 2 "tau" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply" --tau -3

@@ -18,6 +18,10 @@ struct SensorModel {
     /// Velodyne HDL-64E as in KITTI: 64 beams evenly from +2 deg to -24.8 deg, 0.18 deg azimuth
     /// step (2,000 rays per beam per revolution), 120 m range, 2 cm range noise.
     static SensorModel hdl64();
+
+    /// The paper's ground-truth sensor (Sec. IV-A): co-located with the HDL-64E, noise-free, 316
+    /// beams over the same elevation span; 0.09 deg azimuth step.
+    static SensorModel ground_truth();
 };
 
 /// Casts every ray of one revolution from `origin` and returns the noisy hits (world frame).
