@@ -86,6 +86,8 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
     app->add_option("--origin", o.origin, "Sensor position x,y,z (orients the normals, Eq. 2)")->capture_default_str();
     app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = paper-literal)")->capture_default_str();
     app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)")->capture_default_str();
+    app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)")->capture_default_str();
+    app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel")->capture_default_str();
     app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
     app->add_option("--bin-fields", o.bin_fields, "float32 values per point in .bin input (KITTI 4, nuScenes 5)")->capture_default_str();

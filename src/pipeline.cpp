@@ -7,6 +7,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
 namespace lidarsurf {
@@ -50,7 +51,7 @@ void Reconstructor::integrate(const PointCloud& cloud) {
     summary_.seconds_insert += seconds_since(t0);
 }
 
-Mesh Reconstructor::extract_mesh() {
+Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     if (grid_.point_count() == 0)
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + std::to_string(summary_.points_read) + " dropped)");
@@ -58,13 +59,29 @@ Mesh Reconstructor::extract_mesh() {
     Mesh mesh;
     arena.execute([&] {
         auto t0 = std::chrono::steady_clock::now();
-        TsdfStats stats;
-        const TsdfField field = compute_tsdf(grid_, config_, sensor_, &stats);
-        summary_.seconds_tsdf = seconds_since(t0);
-        summary_.candidate_vertices = stats.candidates;
-        summary_.defined_vertices = stats.defined;
-        t0 = std::chrono::steady_clock::now();
-        mesh = lidarsurf::extract_mesh(field);
+        if (config_.seeded_surface && evaluation == Evaluation::Fast) {
+            const SeededTsdf seeded = compute_seeded_tsdf(grid_, config_, sensor_);
+            summary_.seconds_tsdf = seconds_since(t0);
+            summary_.candidate_vertices = seeded.evaluated;
+            summary_.defined_vertices = seeded.field.size();
+            t0 = std::chrono::steady_clock::now();
+            mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes);
+        } else {
+            TsdfStats stats;
+            const TsdfField field = compute_tsdf(grid_, config_, sensor_, &stats);
+            summary_.candidate_vertices = stats.candidates;
+            summary_.defined_vertices = stats.defined;
+            if (config_.seeded_surface) {
+                const std::vector<VoxelKey> cubes = seeded_cubes(field, grid_, config_.seed_dilation);
+                summary_.seconds_tsdf = seconds_since(t0);
+                t0 = std::chrono::steady_clock::now();
+                mesh = lidarsurf::extract_mesh(field, cubes);
+            } else {
+                summary_.seconds_tsdf = seconds_since(t0);
+                t0 = std::chrono::steady_clock::now();
+                mesh = lidarsurf::extract_mesh(field);
+            }
+        }
         summary_.seconds_mesh = seconds_since(t0);
     });
     summary_.mesh_vertices = mesh.vertices.size();

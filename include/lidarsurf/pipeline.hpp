@@ -26,6 +26,12 @@ struct ReconstructionSummary {
     std::string to_string() const;
 };
 
+/// How the TSDF is computed: both give the same mesh (tests/test_pipeline.cpp checks it).
+enum class Evaluation {
+    Fast,       ///< with seeded_surface: only the vertices the surface search touches
+    Reference,  ///< every candidate vertex, the straightforward per-vertex evaluation
+};
+
 class Reconstructor {
 public:
     /// Validates `config` (throws InvalidArgument). `sensor` orients the normals (Eq. 2).
@@ -35,7 +41,7 @@ public:
     void integrate(const PointCloud& cloud);
 
     /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated.
-    Mesh extract_mesh();
+    Mesh extract_mesh(Evaluation evaluation = Evaluation::Fast);
 
     const ReconstructionSummary& summary() const { return summary_; }
     const VoxelGrid& grid() const { return grid_; }

@@ -203,4 +203,10 @@ Mesh extract_mesh(const TsdfField& field) {
     return builder.take();
 }
 
+Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes) {
+    MeshBuilder builder(field);
+    for (const VoxelKey& v : cubes) builder.process_cube(v);
+    return builder.take();
+}
+
 }  // namespace lidarsurf

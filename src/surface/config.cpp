@@ -46,6 +46,8 @@ void ReconstructionConfig::validate() const {
         fail("truncation must be finite and >= 0 voxels (0 disables it; got " + std::to_string(truncation_voxels) + ")");
     if (truncation_voxels > 0 && truncation_voxels < 0.8660254037844386)
         fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + std::to_string(truncation_voxels) + ")");
+    if (seed_dilation < 0 || seed_dilation > kMaxNeighbourhoodLevel)
+        fail("seed dilation must be in [0, " + std::to_string(kMaxNeighbourhoodLevel) + "] (got " + std::to_string(seed_dilation) + ")");
     if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
 }
 

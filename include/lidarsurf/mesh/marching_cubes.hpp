@@ -7,11 +7,17 @@
 // surface is closed), the segments are chained into loops, and each loop is fanned into
 // triangles. Vertices are keyed by lattice edge, so shared vertices are welded. Triangles face
 // the positive side of the field (the sensor side of the TSDF).
+#include <vector>
+
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
 namespace lidarsurf {
 
+/// Meshes every cube of `field` whose 8 corners are defined.
 Mesh extract_mesh(const TsdfField& field);
+
+/// Meshes only the given cubes (by minimum corner), in the given order.
+Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes);
 
 }  // namespace lidarsurf

@@ -34,6 +34,12 @@ struct ReconstructionConfig {
     /// a corner of a cube that the surface crosses is within the cube diagonal (sqrt(3) voxels) of
     /// it, so vertices with |TSDF| beyond that are left undefined (docs/method.md). 0 disables.
     double truncation_voxels = 1.7320508075688772;
+    /// Keep only the surface connected to the data: marching-cubes cubes reachable from an
+    /// occupied voxel through faces the surface crosses (docs/method.md, "Seeded surface").
+    /// false meshes every cube whose corners are defined (the full dilation, paper-literal).
+    bool seeded_surface = true;
+    /// Seeds of that search: the cubes within this many cubes of an occupied voxel.
+    int seed_dilation = 0;
     int threads = 0;           ///< Worker threads; 0 = all cores.
 
     /// Largest level this configuration evaluates (k_max or k).

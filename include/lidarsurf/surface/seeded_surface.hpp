@@ -1,0 +1,35 @@
+#pragma once
+// The surface reachable from the data (docs/method.md, "Seeded surface"): the marching-cubes
+// cubes connected, through faces the surface crosses, to a cube that is an occupied voxel. Sheets
+// and blobs that the extrapolated planes create in empty space, touching no data, are dropped.
+//
+// Two implementations of the same definition:
+//  - reference: evaluate every candidate vertex (compute_tsdf), then search the cubes;
+//  - fast: search the cubes from the occupied voxels, evaluating a vertex only when a cube
+//    being visited needs it (each with the same evaluate_vertex, so the values are identical).
+#include <vector>
+
+#include "lidarsurf/core/voxel_grid.hpp"
+#include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/surface/tsdf_field.hpp"
+
+namespace lidarsurf {
+
+/// Cube with minimum corner `base` is *active* when its 8 corners are defined and their signs
+/// differ (tsdf < 0 against >= 0, the marching-cubes convention). From an active cube the search
+/// crosses each face whose 4 corners have differing signs. Seeds: the cubes within `dilation`
+/// (Chebyshev distance, in cubes) of an occupied voxel (voxel i is the cube with minimum corner i).
+/// Returns the active cubes reached, sorted (z, y, x).
+std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation);
+
+struct SeededTsdf {
+    TsdfField field;                ///< the defined vertices that were evaluated
+    std::vector<VoxelKey> cubes;    ///< as seeded_cubes(field, grid) on the full field
+    std::size_t evaluated = 0;      ///< vertices evaluated
+};
+
+/// The fast path: same cubes and the same values at their corners as compute_tsdf followed by
+/// seeded_cubes, evaluating only the vertices the search touches (in parallel per search wave).
+SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world);
+
+}  // namespace lidarsurf

@@ -1,0 +1,104 @@
+// The seeded surface: the cube search on a hand-made field (analytic answer), and the fast path
+// (lazy evaluation) against the reference (every candidate evaluated, then searched): the same
+// mesh on several scans in every mode.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/pipeline.hpp"
+#include "lidarsurf/sim/sensor_model.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+
+// Field on the vertices of [lo, hi]^3 with value z - plane (a horizontal surface).
+void add_slab(TsdfField& f, int lo, int hi, double plane) {
+    for (int z = lo; z <= hi; ++z)
+        for (int y = lo; y <= hi; ++y)
+            for (int x = lo; x <= hi; ++x) {
+                VertexSample s;
+                s.defined = true;
+                s.tsdf = static_cast<float>(z - plane);
+                f.insert({x, y, z}, s);
+            }
+}
+
+void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
+    ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
+    ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
+    for (std::size_t i = 0; i < a.vertices.size(); ++i) ASSERT_LT((a.vertices[i] - b.vertices[i]).norm(), 1e-6) << what;
+    EXPECT_EQ(a.triangles, b.triangles) << what;
+}
+
+// A rough terrain: terraces at different heights, rocks (boxes) and trees (cylinders).
+sim::AnalyticScene offroad() {
+    sim::AnalyticScene s;
+    s.grounds.push_back({-1.9, 0, 0, 30, 30});
+    s.grounds.push_back({-1.5, 12, 6, 5, 6});
+    s.grounds.push_back({-1.2, -10, -8, 4, 5});
+    s.boxes.push_back({{4, -3, -1.9}, {5.2, -1.8, -1.1}});
+    s.boxes.push_back({{-6, 5, -1.9}, {-4.5, 7, -0.4}});
+    for (int i = 0; i < 6; ++i) s.cylinders.push_back({-15.0 + 6 * i, 10.0 - 3 * i, 0.25, -1.9, 2.5});
+    return s;
+}
+
+}  // namespace
+
+TEST(SeededSurface, KeepsOnlyTheComponentTouchingTheData) {
+    TsdfField field;
+    field.voxel_size = 1.0;
+    add_slab(field, 0, 4, 1.5);    // a surface through the cubes with z = 1, x, y in [0, 3]
+    add_slab(field, 10, 14, 11.5); // the same, far from any data
+    VoxelGrid grid(1.0, Eigen::Vector3d::Zero());
+    grid.insert({1.5, 1.5, 1.5});  // voxel (1, 1, 1): a cube of the first surface
+    const auto cubes = seeded_cubes(field, grid, 0);
+    std::set<std::tuple<int, int, int>> got, want;
+    for (const auto& c : cubes) got.insert({c.x(), c.y(), c.z()});
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) want.insert({x, y, 1});
+    EXPECT_EQ(got, want);
+    EXPECT_TRUE(std::is_sorted(cubes.begin(), cubes.end(), [](const VoxelKey& a, const VoxelKey& b) {
+        return std::tie(a.z(), a.y(), a.x()) < std::tie(b.z(), b.y(), b.x());
+    }));
+    // A seed away from both surfaces reaches nothing; a dilation of 1 around it still does not.
+    VoxelGrid far(1.0, Eigen::Vector3d::Zero());
+    far.insert({6.5, 6.5, 6.5});
+    EXPECT_TRUE(seeded_cubes(field, far, 1).empty());
+    // A dilation of 5 around (6,6,6) includes cube (10,10,11) of the second surface ...
+    EXPECT_EQ(seeded_cubes(field, far, 5).size(), 32u);  // and cubes (1..3, 1..3, 1) of the first
+    // The mesh of the kept cubes is the first surface only.
+    const Mesh mesh = extract_mesh(field, cubes);
+    ASSERT_FALSE(mesh.empty());
+    for (const auto& v : mesh.vertices) EXPECT_NEAR(v.z(), 1.5, 1e-9);
+}
+
+TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
+    struct Scan {
+        std::string name;
+        sim::AnalyticScene scene;
+        Eigen::Vector3d origin;
+    };
+    const std::vector<Scan> scans = {{"demo", sim::AnalyticScene::demo(), Eigen::Vector3d::Zero()},
+                                     {"offroad", offroad(), Eigen::Vector3d(1.0, -2.0, 0.3)}};
+    for (const Scan& scan : scans) {
+        const PointCloud cloud = sim::simulate_scan(scan.scene, sim::SensorModel::hdl64(), scan.origin, 5);
+        for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
+            ReconstructionConfig c;
+            c.mode = mode;
+            c.k = 3;
+            const std::string what = scan.name + " " + std::string(to_string(mode));
+            Reconstructor fast(c, scan.origin), reference(c, scan.origin);
+            fast.integrate(cloud);
+            reference.integrate(cloud);
+            const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
+            ASSERT_GT(a.triangles.size(), 1000u) << what;
+            expect_same_mesh(a, b, what);
+            // The fast path evaluates far fewer vertices than the full candidate set.
+            EXPECT_LT(fast.summary().candidate_vertices, reference.summary().candidate_vertices) << what;
+        }
+    }
+}
