@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 PREFIX ?= /usr/local
 CMAKE_FLAGS ?=
 
-.PHONY: setup configure build demo test sanitize install package-check clean
+.PHONY: setup configure build demo test sanitize install package-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -29,9 +29,13 @@ test: build
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (second build directory).
 sanitize: setup
-	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_BENCH=OFF
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS)
+
+# The Python package in the build tree: PYTHONPATH=$(BUILD)/python /usr/bin/python3 -c 'import lidarsurf'
+python: build
+	@echo "use: PYTHONPATH=$(CURDIR)/$(BUILD)/python /usr/bin/python3 python/examples/reconstruct.py"
 
 install: build
 	cmake --install $(BUILD) --prefix $(PREFIX)

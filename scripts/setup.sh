@@ -12,6 +12,8 @@ PKGS=(
   liblzf-dev           # PCD binary_compressed (LZF)
   libgtest-dev         # unit tests
   libbenchmark-dev     # micro-benchmarks
+  python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
+  python3-numpy python3-pytest
 )
 
 missing=()

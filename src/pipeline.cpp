@@ -37,10 +37,12 @@ Reconstructor::Reconstructor(const ReconstructionConfig& config, const Eigen::Ve
     if (!sensor.allFinite()) throw InvalidArgument("sensor origin must be finite");
 }
 
-void Reconstructor::integrate(const PointCloud& cloud) {
+void Reconstructor::integrate(const PointCloud& cloud) { integrate(std::span<const Eigen::Vector3d>(cloud.points)); }
+
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
     const auto t0 = std::chrono::steady_clock::now();
-    summary_.points_read += cloud.points.size();
-    for (const auto& p : cloud.points) {
+    summary_.points_read += points.size();
+    for (const auto& p : points) {
         if (!p.allFinite()) {
             ++summary_.points_dropped;
             continue;

@@ -1,6 +1,7 @@
 #pragma once
 // The reconstruction pipeline (Sec. III): points -> voxel statistics -> adaptive TSDF ->
 // marching cubes. Composes the modules; holds the voxel grid so more scans can be integrated.
+#include <span>
 #include <string>
 
 #include <Eigen/Core>
@@ -39,6 +40,8 @@ public:
 
     /// Adds the finite points of `cloud` to the voxel statistics; counts the others as dropped.
     void integrate(const PointCloud& cloud);
+    /// The same on a view (no copy): used by the Python bindings on numpy arrays.
+    void integrate(std::span<const Eigen::Vector3d> points);
 
     /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated.
     Mesh extract_mesh(Evaluation evaluation = Evaluation::Fast);

@@ -1,0 +1,272 @@
+// pybind11 bindings of lidarsurf: numpy in, numpy out, the C++ ReconstructionConfig bound as
+// lidarsurf.Config (defaults defined once, in C++). The GIL is released while C++ runs; library
+// exceptions become ValueError (bad parameters or data) or OSError (files).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <span>
+#include <sstream>
+
+#include "lidarsurf/baselines/imls.hpp"
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/eval/metrics.hpp"
+#include "lidarsurf/eval/report.hpp"
+#include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/pipeline.hpp"
+#include "lidarsurf/sim/sensor_model.hpp"
+#include "lidarsurf/version.hpp"
+
+namespace py = pybind11;
+using namespace lidarsurf;
+
+namespace {
+
+using PointArray = py::array_t<double, py::array::c_style>;
+
+// The (N, 3) float64 C-contiguous view the C++ code reads. A float64 C-contiguous input is used
+// as it is (no copy); float32 or non-contiguous inputs are converted once.
+PointArray points_view(const py::handle& obj, const char* what) {
+    py::array arr = py::array::ensure(obj);
+    if (!arr) throw InvalidArgument(std::string(what) + " must be an array-like of shape (N, 3)");
+    if (arr.dtype().kind() != 'f')
+        throw InvalidArgument(std::string(what) + " must be a float32 or float64 array (got dtype " + std::string(py::str(arr.dtype())) + ")");
+    if (arr.ndim() != 2 || arr.shape(1) != 3) {
+        std::ostringstream shape;
+        for (py::ssize_t i = 0; i < arr.ndim(); ++i) shape << (i ? ", " : "") << arr.shape(i);
+        throw InvalidArgument(std::string(what) + " must have shape (N, 3) (got (" + shape.str() + "))");
+    }
+    PointArray view = PointArray::ensure(arr);
+    const double* d = view.data();
+    std::size_t bad = 0;
+    for (py::ssize_t i = 0; i < view.size(); ++i) bad += !std::isfinite(d[i]);
+    if (bad)
+        throw InvalidInput(std::string(what) + " contain " + std::to_string(bad) +
+                           " non-finite values; drop those rows first, e.g. p[np.isfinite(p).all(axis=1)]");
+    return view;
+}
+
+std::span<const Eigen::Vector3d> as_span(const PointArray& a) {
+    return {reinterpret_cast<const Eigen::Vector3d*>(a.data()), static_cast<std::size_t>(a.shape(0))};
+}
+
+Eigen::Vector3d as_vec3(const std::vector<double>& v, const char* what) {
+    if (v.size() != 3) throw InvalidArgument(std::string(what) + " must have 3 values");
+    return {v[0], v[1], v[2]};
+}
+
+// numpy array over a std::vector owned by `owner` (kept alive by the array's base).
+template <typename T, int Cols>
+py::array vector_view(const std::vector<T>& v, const py::object& owner) {
+    if constexpr (Cols == 1) {
+        return py::array_t<T>({static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner);
+    } else {
+        using Scalar = typename T::Scalar;
+        return py::array_t<Scalar>({static_cast<py::ssize_t>(v.size()), static_cast<py::ssize_t>(Cols)},
+                                   {static_cast<py::ssize_t>(sizeof(T)), static_cast<py::ssize_t>(sizeof(Scalar))},
+                                   reinterpret_cast<const Scalar*>(v.data()), owner);
+    }
+}
+
+py::array_t<double> points_to_numpy(std::vector<Eigen::Vector3d>&& pts) {
+    auto* owned = new std::vector<Eigen::Vector3d>(std::move(pts));
+    py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<Eigen::Vector3d>*>(p); });
+    return py::array_t<double>({static_cast<py::ssize_t>(owned->size()), py::ssize_t{3}},
+                               {static_cast<py::ssize_t>(sizeof(Eigen::Vector3d)), static_cast<py::ssize_t>(sizeof(double))},
+                               reinterpret_cast<const double*>(owned->data()), free_when_done);
+}
+
+Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin, std::optional<ReconstructionConfig> config,
+                    std::optional<std::string> method) {
+    ReconstructionConfig c = config.value_or(ReconstructionConfig{});
+    const PointArray view = points_view(points, "points");
+    const Eigen::Vector3d sensor = as_vec3(origin, "origin");
+    const bool imls = method && *method == "imls";
+    if (method && !imls) c.mode = parse_mode(*method);  // InvalidArgument names the choices
+    c.validate();
+    py::gil_scoped_release release;
+    if (imls) {
+        PointCloud cloud;
+        const auto span = as_span(view);
+        cloud.points.assign(span.begin(), span.end());  // IMLS keeps its own copy for the kd-tree
+        return reconstruct_imls(cloud, sensor, ImlsConfig::matching(c));
+    }
+    Reconstructor rec(c, sensor);
+    rec.integrate(as_span(view));
+    return rec.extract_mesh();
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_lidarsurf, m) {
+    m.doc() = "lidarsurf: surface reconstruction from lidar scans (Roldao et al., ITSC 2019).";
+    m.attr("__version__") = LIDARSURF_VERSION_STRING;
+
+    // Exceptions: bad parameters or data -> ValueError, files -> OSError, with the C++ message.
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const IoError& e) {
+            PyErr_SetString(PyExc_OSError, e.what());
+        } catch (const Error& e) {
+            PyErr_SetString(PyExc_ValueError, e.what());
+        }
+    });
+
+    py::class_<ReconstructionConfig>(m, "Config",
+                                     "Reconstruction parameters: the C++ ReconstructionConfig, with the paper's defaults "
+                                     "(alpha 0.2 m, tau 0.2, N_min 10, k_max 5). validate() raises ValueError on a bad value.")
+        .def(py::init<>(), "A configuration with the paper's defaults.")
+        .def_readwrite("voxel_size", &ReconstructionConfig::voxel_size, "Voxel size alpha, metres.")
+        .def_readwrite("tau", &ReconstructionConfig::tau, "Gaussian confidence threshold tau of Eq. (3).")
+        .def_readwrite("n_min", &ReconstructionConfig::n_min, "N_min of Eq. (1): minimum points in a neighbourhood.")
+        .def_readwrite("k_max", &ReconstructionConfig::k_max, "Largest neighbourhood level of the adaptive modes.")
+        .def_readwrite("k", &ReconstructionConfig::k, "Neighbourhood level of the constant modes.")
+        .def_property(
+            "mode", [](const ReconstructionConfig& c) { return std::string(to_string(c.mode)); },
+            [](ReconstructionConfig& c, const std::string& s) { c.mode = parse_mode(s); },
+            "Neighbourhood strategy: 'an+gc' (default), 'an', 'cn+gc' or 'cn'.")
+        .def_readwrite("min_planarity", &ReconstructionConfig::min_planarity,
+                       "Reject neighbourhoods with lambda2 < min_planarity * lambda1 (0 = paper-literal).")
+        .def_readwrite("truncation_voxels", &ReconstructionConfig::truncation_voxels, "TSDF truncation in voxels (0 = none).")
+        .def_readwrite("seeded_surface", &ReconstructionConfig::seeded_surface,
+                       "Keep only the surface connected to the data (False: every cube with defined corners).")
+        .def_readwrite("seed_dilation", &ReconstructionConfig::seed_dilation, "Seed cubes within this many cubes of an occupied voxel.")
+        .def_readwrite("threads", &ReconstructionConfig::threads, "Worker threads; 0 = all cores.")
+        .def("validate", &ReconstructionConfig::validate, "Raise ValueError naming the first bad field.")
+        .def("__repr__", [](const ReconstructionConfig& c) {
+            std::ostringstream o;
+            o << "Config(voxel_size=" << c.voxel_size << ", tau=" << c.tau << ", n_min=" << c.n_min << ", k_max=" << c.k_max
+              << ", k=" << c.k << ", mode='" << to_string(c.mode) << "', min_planarity=" << c.min_planarity
+              << ", truncation_voxels=" << c.truncation_voxels << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")
+              << ", seed_dilation=" << c.seed_dilation << ", threads=" << c.threads << ")";
+            return o.str();
+        });
+
+    py::class_<Mesh>(m, "Mesh", "Triangle mesh. Array attributes are read-only views into the mesh (no copy).")
+        .def(py::init([](const py::handle& vertices, py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> triangles) {
+                 const PointArray v = points_view(vertices, "vertices");
+                 if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw InvalidArgument("triangles must have shape (T, 3)");
+                 Mesh mesh;
+                 const auto span = as_span(v);
+                 mesh.vertices.assign(span.begin(), span.end());
+                 for (py::ssize_t t = 0; t < triangles.shape(0); ++t) {
+                     std::array<std::uint32_t, 3> tri{};
+                     for (int j = 0; j < 3; ++j) {
+                         const std::int64_t i = triangles.at(t, j);
+                         if (i < 0 || i >= static_cast<std::int64_t>(mesh.vertices.size()))
+                             throw InvalidInput("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(i) + " of " +
+                                                std::to_string(mesh.vertices.size()));
+                         tri[static_cast<std::size_t>(j)] = static_cast<std::uint32_t>(i);
+                     }
+                     mesh.triangles.push_back(tri);
+                 }
+                 return mesh;
+             }),
+             py::arg("vertices"), py::arg("triangles"), "A mesh from (V, 3) vertices and (T, 3) vertex indices (copied).")
+        .def_property_readonly(
+            "vertices", [](py::object self) { return vector_view<Eigen::Vector3d, 3>(self.cast<const Mesh&>().vertices, self); },
+            "(V, 3) float64 vertex positions, metres.")
+        .def_property_readonly(
+            "triangles",
+            [](py::object self) {
+                const auto& t = self.cast<const Mesh&>().triangles;
+                return py::array_t<std::uint32_t>({static_cast<py::ssize_t>(t.size()), py::ssize_t{3}},
+                                                  {static_cast<py::ssize_t>(sizeof(t[0])), static_cast<py::ssize_t>(sizeof(std::uint32_t))},
+                                                  reinterpret_cast<const std::uint32_t*>(t.data()), self);
+            },
+            "(T, 3) uint32 vertex indices, counter-clockwise seen from the sensor side.")
+        .def_property_readonly(
+            "normals", [](py::object self) { return vector_view<Eigen::Vector3f, 3>(self.cast<const Mesh&>().normals, self); },
+            "(V, 3) float32 per-vertex normals (empty when absent).")
+        .def_property_readonly(
+            "levels", [](py::object self) { return vector_view<std::uint8_t, 1>(self.cast<const Mesh&>().levels, self); },
+            "(V,) uint8 neighbourhood level k' per vertex (empty when absent).")
+        .def_property_readonly(
+            "confidence", [](py::object self) { return vector_view<float, 1>(self.cast<const Mesh&>().confidence, self); },
+            "(V,) float32 Gaussian confidence of Eq. (3) per vertex (empty when absent).")
+        .def(
+            "save",
+            [](const Mesh& mesh, const std::string& path, const std::string& format) {
+                const MeshFormat f = parse_mesh_format(format);
+                py::gil_scoped_release release;
+                write_mesh(mesh, path, f);
+            },
+            py::arg("path"), py::arg("format") = "auto",
+            "Write the mesh atomically: .ply (binary) by default, .obj by extension; format 'ply', 'ply-ascii' or 'obj'.")
+        .def("__repr__", [](const Mesh& mesh) {
+            return "Mesh(" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.triangles.size()) + " triangles)";
+        });
+
+    m.def("points_view", [](const py::handle& points) { return points_view(points, "points"); }, py::arg("points"),
+          "The (N, 3) float64 C-contiguous array reconstruct() reads: the input itself when it already is one (no copy).");
+
+    m.def("reconstruct", &reconstruct_py, py::arg("points"), py::arg("origin") = std::vector<double>{0, 0, 0},
+          py::arg("config") = py::none(), py::arg("method") = py::none(),
+          "Reconstruct a mesh from an (N, 3) float32/float64 array of points seen from `origin` (the sensor).\n"
+          "config: a Config (paper defaults when None). method: None (config.mode), a mode name ('an+gc', 'an',\n"
+          "'cn+gc', 'cn') overriding config.mode, or 'imls' for the IMLS baseline with the matching settings.\n"
+          "Raises ValueError on a bad parameter or non-finite points.");
+
+    m.def(
+        "read_points",
+        [](const std::string& path, const std::string& format, int bin_fields) {
+            PointReadOptions o;
+            o.format = parse_point_format(format);
+            o.bin_fields = bin_fields;
+            PointCloud cloud;
+            {
+                py::gil_scoped_release release;
+                cloud = read_points(path, o);
+            }
+            return points_to_numpy(std::move(cloud.points));
+        },
+        py::arg("path"), py::arg("format") = "auto", py::arg("bin_fields") = 4,
+        "Read a point cloud (KITTI .bin, .ply, .pcd, .xyz/.csv/.txt) as an (N, 3) float64 array. Non-finite points are kept.");
+
+    m.def(
+        "read_mesh",
+        [](const std::string& path) {
+            py::gil_scoped_release release;
+            return read_mesh(path);
+        },
+        py::arg("path"), "Read a triangle mesh (.ply or .obj).");
+
+    m.def(
+        "_evaluate_json",
+        [](const Mesh& mesh, const py::handle& gt, const std::vector<double>& origin, double max_range, double threshold, double delta,
+           std::uint64_t seed) {
+            const PointArray view = points_view(gt, "gt_points");
+            EvaluationConfig c;
+            c.origin = as_vec3(origin, "origin");
+            c.max_range = max_range;
+            c.threshold = threshold;
+            c.delta = delta;
+            c.seed = seed;
+            const auto span = as_span(view);
+            const std::vector<Eigen::Vector3d> pts(span.begin(), span.end());
+            py::gil_scoped_release release;
+            return to_json(evaluate(mesh, pts, c));
+        },
+        py::arg("mesh"), py::arg("gt_points"), py::arg("origin"), py::arg("max_range"), py::arg("threshold"), py::arg("delta"),
+        py::arg("seed"), "Metrics of `mesh` against `gt_points` as JSON text (use lidarsurf.evaluate).");
+
+    m.def(
+        "simulate",
+        [](const std::string& scene, std::uint64_t seed, bool ground_truth) {
+            if (scene != "demo") throw InvalidArgument("unknown scene '" + scene + "' (available: demo)");
+            PointCloud cloud;
+            {
+                py::gil_scoped_release release;
+                cloud = sim::simulate_scan(sim::AnalyticScene::demo(),
+                                           ground_truth ? sim::SensorModel::ground_truth() : sim::SensorModel::hdl64(),
+                                           Eigen::Vector3d::Zero(), seed);
+            }
+            return points_to_numpy(std::move(cloud.points));
+        },
+        py::arg("scene") = "demo", py::arg("seed") = 1, py::arg("ground_truth") = false,
+        "Simulate an HDL-64E scan of a built-in scene from the origin, as an (N, 3) array; ground_truth=True gives\n"
+        "the co-located noise-free 316-beam scan used as ground truth.");
+}

@@ -1,0 +1,144 @@
+"""Tests of the Python bindings: same mesh as the CLI, numpy views, errors, Config."""
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import lidarsurf
+
+
+@pytest.fixture(scope="module")
+def scan():
+    return lidarsurf.simulate(seed=1)
+
+
+def test_config_defaults_come_from_cpp():
+    c = lidarsurf.Config()
+    assert (c.voxel_size, c.tau, c.n_min, c.k_max, c.mode) == (0.2, 0.2, 10, 5, "an+gc")
+    c.mode = "CN"
+    assert c.mode == "cn"
+    c.validate()
+
+
+@pytest.mark.parametrize("field,value,message", [
+    ("voxel_size", -1.0, "voxel size"),
+    ("voxel_size", float("nan"), "voxel size"),
+    ("tau", 0.0, "tau"),
+    ("k_max", 0, "k_max"),
+    ("n_min", 0, "n_min"),
+])
+def test_bad_config_raises_value_error(field, value, message, scan):
+    c = lidarsurf.Config()
+    setattr(c, field, value)
+    with pytest.raises(ValueError, match=message):
+        c.validate()
+    with pytest.raises(ValueError, match=message):
+        lidarsurf.reconstruct(scan[:1000], config=c)
+
+
+def test_bad_mode_raises_value_error():
+    c = lidarsurf.Config()
+    with pytest.raises(ValueError, match="unknown mode"):
+        c.mode = "fast"
+    with pytest.raises(ValueError, match="unknown mode"):
+        lidarsurf.reconstruct(np.zeros((10, 3)), method="poisson")
+
+
+def test_same_mesh_as_the_cli(scan, tmp_path):
+    cli = os.environ.get("LIDARSURF_CLI")
+    if not cli:
+        pytest.skip("LIDARSURF_CLI not set (run through ctest)")
+    mesh_path = tmp_path / "mesh.ply"
+    # The same points for both: text with 17 significant digits round-trips float64 exactly.
+    np.savetxt(tmp_path / "scan.xyz", scan, fmt="%.17g")
+    subprocess.run([cli, "reconstruct", str(tmp_path / "scan.xyz"), "-o", str(mesh_path), "--mode", "an", "--kmax", "4"],
+                   check=True, capture_output=True)
+    c = lidarsurf.Config()
+    c.mode, c.k_max = "an", 4
+    ours = lidarsurf.reconstruct(scan, origin=(0, 0, 0), config=c)
+    theirs = lidarsurf.read_mesh(str(mesh_path))
+    assert ours.triangles.shape[0] > 1000
+    np.testing.assert_array_equal(ours.triangles, theirs.triangles)
+    np.testing.assert_allclose(ours.vertices, theirs.vertices, rtol=0, atol=1e-6)
+
+
+def test_float64_c_contiguous_input_is_not_copied(scan):
+    assert lidarsurf.points_view(scan) is scan or np.shares_memory(lidarsurf.points_view(scan), scan)
+    f32 = scan.astype(np.float32)
+    assert not np.shares_memory(lidarsurf.points_view(f32), f32)  # converted once
+    strided = np.asfortranarray(scan)
+    assert not np.shares_memory(lidarsurf.points_view(strided), strided)
+
+
+def test_float32_gives_a_mesh_close_to_float64(scan):
+    a = lidarsurf.reconstruct(scan)
+    b = lidarsurf.reconstruct(scan.astype(np.float32))
+    assert abs(a.triangles.shape[0] - b.triangles.shape[0]) < 0.02 * a.triangles.shape[0]
+
+
+@pytest.mark.parametrize("points,message", [
+    (np.zeros((10, 2)), r"shape \(N, 3\)"),
+    (np.zeros((10,)), r"shape \(N, 3\)"),
+    (np.zeros((10, 3), dtype=np.int32), "float32 or float64"),
+    (np.array([[0.0, 0.0, np.nan]] * 5), "non-finite"),
+    (np.array([[np.inf, 0.0, 0.0]] * 5), "non-finite"),
+    ("not points", "array"),
+])
+def test_bad_points_raise_value_error(points, message):
+    with pytest.raises(ValueError, match=message):
+        lidarsurf.reconstruct(points)
+
+
+def test_empty_cloud_raises_value_error():
+    with pytest.raises(ValueError, match="no points"):
+        lidarsurf.reconstruct(np.zeros((0, 3)))
+
+
+def test_mesh_arrays_are_views_kept_alive(scan):
+    mesh = lidarsurf.reconstruct(scan)
+    v = mesh.vertices
+    assert v.shape[1] == 3 and v.dtype == np.float64
+    del mesh
+    assert np.isfinite(v).all()  # the array keeps the mesh alive
+    mesh = lidarsurf.reconstruct(scan)
+    assert mesh.levels.shape == (mesh.vertices.shape[0],)
+    assert mesh.confidence.dtype == np.float32
+    assert mesh.triangles.max() < mesh.vertices.shape[0]
+
+
+def test_save_read_points_and_os_errors(scan, tmp_path):
+    mesh = lidarsurf.reconstruct(scan)
+    mesh.save(str(tmp_path / "m.obj"))
+    back = lidarsurf.read_mesh(str(tmp_path / "m.obj"))
+    assert back.triangles.shape == mesh.triangles.shape
+    with pytest.raises(OSError, match="cannot"):
+        mesh.save(str(tmp_path / "missing_dir" / "m.ply"))
+    with pytest.raises(OSError, match="cannot open"):
+        lidarsurf.read_points(str(tmp_path / "nothing.bin"))
+    (tmp_path / "bad.bin").write_bytes(b"abc")
+    with pytest.raises(ValueError, match="multiple"):
+        lidarsurf.read_points(str(tmp_path / "bad.bin"))
+    scan.astype(np.float32).tofile(tmp_path / "raw.bin")  # 3 floats per point
+    pts = lidarsurf.read_points(str(tmp_path / "raw.bin"), bin_fields=3)
+    np.testing.assert_allclose(pts, scan.astype(np.float32), rtol=0, atol=0)
+
+
+def test_evaluate_returns_the_metrics(scan):
+    gt = lidarsurf.simulate(ground_truth=True)
+    ours = lidarsurf.reconstruct(scan)
+    imls = lidarsurf.reconstruct(scan, method="imls")
+    a, b = lidarsurf.evaluate(ours, gt), lidarsurf.evaluate(imls, gt)
+    assert a["paper"]["p_to_gt"]["mean"] < 0.6 * b["paper"]["p_to_gt"]["mean"]
+    assert 0 <= a["surface"]["fscore"] <= 1
+    # Known answer: a square at z = 0 against points 0.1 m above its vertices.
+    xs, ys = np.meshgrid(np.arange(11) * 0.1, np.arange(11) * 0.1)
+    verts = np.c_[xs.ravel(), ys.ravel(), np.zeros(121)]
+    idx = lambda i, j: j * 11 + i
+    tris = [[idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)] for j in range(10) for i in range(10)]
+    tris += [[idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)] for j in range(10) for i in range(10)]
+    square = lidarsurf.Mesh(verts, np.array(tris))
+    m = lidarsurf.evaluate(square, verts + [0, 0, 0.1])
+    assert m["paper"]["ae_sym"] == pytest.approx(0.1, abs=1e-9)
+    with pytest.raises(ValueError, match="refers to vertex"):
+        lidarsurf.Mesh(verts, np.array([[0, 1, 500]]))
