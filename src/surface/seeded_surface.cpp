@@ -51,6 +51,10 @@ std::vector<VoxelKey> search(const VoxelGrid& grid, int dilation, Lookup&& looku
                 for (int x = -dilation; x <= dilation; ++x) visited.insert(k + VoxelKey(x, y, z));
     std::vector<VoxelKey> wave(visited.begin(), visited.end()), next, active;
     std::sort(wave.begin(), wave.end(), zyx_less);
+    // A surface through a seed's corner (|value| <= eps, e.g. data lying on a lattice plane) may
+    // cross only the neighbouring cubes (zero counts as positive): they become seeds too.
+    const double eps = 1e-6 * grid.voxel_size();
+    bool seeding = true;
     while (!wave.empty()) {
         prepare(wave);
         next.clear();
@@ -63,7 +67,19 @@ std::vector<VoxelKey> search(const VoxelGrid& grid, int dilation, Lookup&& looku
                 all = s[c] != nullptr;
                 if (all) negatives += s[c]->tsdf < 0;
             }
-            if (!all || negatives == 0 || negatives == 8) continue;
+            if (!all) continue;
+            if (negatives == 0 || negatives == 8) {
+                if (!seeding) continue;
+                for (int c = 0; c < 8; ++c) {
+                    if (!(std::fabs(s[c]->tsdf) <= eps)) continue;
+                    const VoxelKey v = corner(cube, c);
+                    for (int n = 0; n < 8; ++n) {  // the 8 cubes around vertex v
+                        const VoxelKey nb = v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1);
+                        if (visited.insert(nb).second) next.push_back(nb);
+                    }
+                }
+                continue;
+            }
             active.push_back(cube);
             for (const Face& f : faces()) {
                 int neg = 0;
@@ -75,6 +91,7 @@ std::vector<VoxelKey> search(const VoxelGrid& grid, int dilation, Lookup&& looku
         }
         std::swap(wave, next);
         std::sort(wave.begin(), wave.end(), zyx_less);
+        seeding = false;
     }
     std::sort(active.begin(), active.end(), zyx_less);
     return active;

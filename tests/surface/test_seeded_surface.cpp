@@ -102,3 +102,19 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
         }
     }
 }
+
+TEST(SeededSurface, DataOnALatticePlaneIsStillMeshed) {
+    // Noise-free points exactly on a lattice plane: the TSDF is zero on that plane and, zero
+    // counting as positive, the surface crosses the cubes *below* the occupied voxels.
+    PointCloud cloud;
+    for (int i = 0; i < 60; ++i)
+        for (int j = 0; j < 60; ++j) cloud.points.emplace_back(0.05 * i, 0.05 * j, -1.0);
+    ReconstructionConfig c;
+    Reconstructor fast(c, Eigen::Vector3d::Zero()), reference(c, Eigen::Vector3d::Zero());
+    fast.integrate(cloud);
+    reference.integrate(cloud);
+    const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
+    ASSERT_GT(a.triangles.size(), 100u);
+    expect_same_mesh(a, b, "lattice plane");
+    for (const auto& v : a.vertices) EXPECT_NEAR(v.z(), -1.0, 1e-6);
+}

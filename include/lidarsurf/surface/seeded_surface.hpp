@@ -18,7 +18,9 @@ namespace lidarsurf {
 /// Cube with minimum corner `base` is *active* when its 8 corners are defined and their signs
 /// differ (tsdf < 0 against >= 0, the marching-cubes convention). From an active cube the search
 /// crosses each face whose 4 corners have differing signs. Seeds: the cubes within `dilation`
-/// (Chebyshev distance, in cubes) of an occupied voxel (voxel i is the cube with minimum corner i).
+/// (Chebyshev distance, in cubes) of an occupied voxel (voxel i is the cube with minimum corner i),
+/// and, for a seed that is not active but has a corner with |tsdf| <= 1e-6 alpha (a surface through
+/// that corner), the 8 cubes around that corner.
 /// Returns the active cubes reached, sorted (z, y, x).
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation);
 
