@@ -243,6 +243,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
         if (o.inputs.size() != 2)
             throw InvalidArgument("evaluate takes MESH GT (or --holdout FRACTION SCAN); got " + std::to_string(o.inputs.size()) + " input(s)");
         ec.origin = parse_vec3(ro.origin, "--origin");
+        ec.threads = ro.config.threads;
         ec.validate();
         mesh = read_mesh(o.inputs[0]);
         gt = read_ground_truth(o.inputs[1], o);

@@ -4,6 +4,7 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
 using namespace lidarsurf;
@@ -37,6 +38,21 @@ void BM_Tsdf(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(compute_tsdf(g, ReconstructionConfig{}, Eigen::Vector3d::Zero()).size());
 }
 BENCHMARK(BM_Tsdf)->Unit(benchmark::kMillisecond);
+
+// The fast path (issue 5): the seeded search with lazy vertex evaluation, against BM_Tsdf above
+// (the reference evaluates every candidate vertex).
+void BM_SeededTsdf(benchmark::State& state) {
+    const VoxelGrid g = make_grid();
+    for (auto _ : state) benchmark::DoNotOptimize(compute_seeded_tsdf(g, ReconstructionConfig{}, Eigen::Vector3d::Zero()).cubes.size());
+}
+BENCHMARK(BM_SeededTsdf)->Unit(benchmark::kMillisecond);
+
+void BM_SeededMarchingCubes(benchmark::State& state) {
+    const VoxelGrid g = make_grid();
+    const SeededTsdf s = compute_seeded_tsdf(g, ReconstructionConfig{}, Eigen::Vector3d::Zero());
+    for (auto _ : state) benchmark::DoNotOptimize(extract_mesh(s.field, s.cubes).triangles.size());
+}
+BENCHMARK(BM_SeededMarchingCubes)->Unit(benchmark::kMillisecond);
 
 void BM_MarchingCubes(benchmark::State& state) {
     const VoxelGrid g = make_grid();
