@@ -148,8 +148,7 @@ Mesh reconstruct_imls(const PointCloud& cloud, const Eigen::Vector3d& sensor, co
             for (std::size_t i = r.begin(); i != r.end(); ++i)
                 samples[i] = f.evaluate(candidates[i].cast<double>() * config.voxel_size, nb);
         });
-        const double truncation = config.truncation_voxels > 0 ? config.truncation_voxels * config.voxel_size
-                                                               : std::numeric_limits<double>::infinity();
+        const double truncation = truncation_distance_of(config.truncation_voxels, config.voxel_size);
         TsdfStats stats;
         const TsdfField field = assemble_field(grid, candidates, samples, truncation, &stats);
         sum.candidates = stats.candidates;

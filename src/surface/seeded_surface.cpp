@@ -97,10 +97,6 @@ std::vector<VoxelKey> search(const VoxelGrid& grid, int dilation, Lookup&& looku
     return active;
 }
 
-double truncation_of(const ReconstructionConfig& config, double voxel_size) {
-    return config.truncation_voxels > 0 ? config.truncation_voxels * voxel_size : std::numeric_limits<double>::infinity();
-}
-
 }  // namespace
 
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation) {
@@ -110,7 +106,7 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world) {
     config.validate();
     const Eigen::Vector3d sensor_local = grid.to_local(sensor_world);
-    const double truncation = truncation_of(config, grid.voxel_size());
+    const double truncation = config.truncation_distance();
     // Every evaluated vertex, defined or not (an undefined one is stored with defined = false).
     std::unordered_map<VoxelKey, VertexSample, VoxelKeyHash> cache;
     cache.reserve(grid.size() * 8);

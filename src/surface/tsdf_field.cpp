@@ -70,9 +70,7 @@ TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config
     });
     // Truncation: a vertex farther than the truncation distance from its plane cannot be a corner
     // of a cube the surface crosses; it stays undefined so no cube is meshed from it.
-    const double truncation = config.truncation_voxels > 0 ? config.truncation_voxels * grid.voxel_size()
-                                                           : std::numeric_limits<double>::infinity();
-    return assemble_field(grid, candidates, samples, truncation, stats);
+    return assemble_field(grid, candidates, samples, config.truncation_distance(), stats);
 }
 
 TsdfField assemble_field(const VoxelGrid& grid, const std::vector<VoxelKey>& candidates,

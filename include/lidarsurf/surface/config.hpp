@@ -2,6 +2,7 @@
 // The one configuration of the reconstruction. Every field carries the paper's default
 // (Sec. IV-A: alpha = 0.2 m, tau = 0.2, N_min = 10, k_max = 5); the CLI and the Python bindings
 // fill this same struct, and validate() is the single place parameters are checked.
+#include <limits>
 #include <string>
 #include <string_view>
 
@@ -19,6 +20,11 @@ enum class Mode {
 std::string_view to_string(Mode mode);
 /// Parses the names above (case-insensitive); throws InvalidArgument on anything else.
 Mode parse_mode(std::string_view name);
+
+/// A truncation given in voxels, in metres; 0 voxels (disabled) gives infinity.
+inline double truncation_distance_of(double truncation_voxels, double voxel_size) {
+    return truncation_voxels > 0 ? truncation_voxels * voxel_size : std::numeric_limits<double>::infinity();
+}
 
 struct ReconstructionConfig {
     double voxel_size = 0.2;   ///< alpha, metres (Sec. III-A).
@@ -41,6 +47,9 @@ struct ReconstructionConfig {
     /// Seeds of that search: the cubes within this many cubes of an occupied voxel.
     int seed_dilation = 0;
     int threads = 0;           ///< Worker threads; 0 = all cores.
+
+    /// The truncation in metres (truncation_voxels * voxel_size), infinity when disabled.
+    double truncation_distance() const { return truncation_distance_of(truncation_voxels, voxel_size); }
 
     /// Largest level this configuration evaluates (k_max or k).
     int max_level() const;
