@@ -138,13 +138,7 @@ Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary) 
     if (m.imls) {
         ImlsSummary s;
         mesh = reconstruct_imls(cloud, m.sensor, m.imls_config, &s);
-        char buf[512];
-        std::snprintf(buf, sizeof buf,
-                      "points %zu (dropped %zu non-finite), vertices evaluated %zu, defined %zu, mesh %zu vertices %zu triangles; "
-                      "time normals %.1f ms, field %.1f ms, mesh %.1f ms (r %.3g m, k %d, h %.3g m)",
-                      s.points, s.dropped, s.candidates, s.defined, mesh.vertices.size(), mesh.triangles.size(), 1e3 * s.seconds_normals,
-                      1e3 * s.seconds_field, 1e3 * s.seconds_mesh, m.imls_config.radius, m.imls_config.normal_k, m.imls_config.bandwidth);
-        summary = buf;
+        summary = s.to_string();
     } else {
         Reconstructor rec(m.config, m.sensor);
         rec.integrate(cloud);

@@ -1,8 +1,8 @@
 #include "lidarsurf/baselines/imls.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <cmath>
-#include <limits>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -20,6 +20,16 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 }  // namespace
+
+std::string ImlsSummary::to_string() const {
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "points %zu (dropped %zu non-finite), vertices evaluated %zu, defined %zu, mesh %zu vertices %zu triangles; "
+                  "time normals %.1f ms, field %.1f ms, mesh %.1f ms (r %.3g m, k %d, h %.3g m)",
+                  points, dropped, candidates, defined, mesh_vertices, mesh_triangles, 1e3 * seconds_normals, 1e3 * seconds_field,
+                  1e3 * seconds_mesh, radius, normal_k, bandwidth);
+    return buf;
+}
 
 ImlsConfig ImlsConfig::matching(const ReconstructionConfig& config) {
     ImlsConfig c;
@@ -159,6 +169,11 @@ Mesh reconstruct_imls(const PointCloud& cloud, const Eigen::Vector3d& sensor, co
         mesh = extract_mesh(field);
         sum.seconds_mesh = seconds_since(t0);
     });
+    sum.mesh_vertices = mesh.vertices.size();
+    sum.mesh_triangles = mesh.triangles.size();
+    sum.radius = config.radius;
+    sum.bandwidth = config.bandwidth;
+    sum.normal_k = config.normal_k;
     if (summary) *summary = sum;
     return mesh;
 }

@@ -121,13 +121,18 @@ EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& 
 
     const bool crop = config.max_range > 0;
     auto in_range = [&](const Eigen::Vector3d& p) { return !crop || (p - config.origin).norm() <= config.max_range; };
-    std::vector<Eigen::Vector3d> vertices, gt;
+    std::vector<Eigen::Vector3d> cropped_vertices, cropped_gt;
     for (const auto& p : mesh.vertices)
-        if (in_range(p)) vertices.push_back(p);
+        if (in_range(p)) cropped_vertices.push_back(p);
     for (const auto& p : gt_in)
-        if (in_range(p)) gt.push_back(p);
-    if (vertices.empty()) throw InvalidInput("no mesh vertex lies within the evaluation range");
-    if (gt.empty()) throw InvalidInput("no ground-truth point lies within the evaluation range");
+        if (in_range(p)) cropped_gt.push_back(p);
+    if (cropped_vertices.empty()) throw InvalidInput("no mesh vertex lies within the evaluation range");
+    if (cropped_gt.empty()) throw InvalidInput("no ground-truth point lies within the evaluation range");
+    // The trees own the cropped sets (no second copy); the metrics read them back from the trees.
+    const KdTree gt_tree(std::move(cropped_gt));
+    const KdTree vertex_tree(std::move(cropped_vertices));
+    const std::vector<Eigen::Vector3d>& gt = gt_tree.points();
+    const std::vector<Eigen::Vector3d>& vertices = vertex_tree.points();
 
     EvaluationResult res;
     res.mesh_vertices = vertices.size();
@@ -137,9 +142,6 @@ EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& 
 
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
     arena.execute([&] {
-        const KdTree gt_tree(gt);
-        const KdTree vertex_tree(vertices);
-
         // The paper's protocol on vertices.
         const std::vector<double> d_p = nearest_distances(vertices, gt_tree);
         const std::vector<double> d_g = nearest_distances(gt, vertex_tree);

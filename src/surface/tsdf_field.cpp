@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <bitset>
 #include <cmath>
-#include <limits>
 
 #include <tbb/parallel_for.h>
 

@@ -5,6 +5,7 @@
 // over the points within radius r of x. Evaluated on the same vertex lattice (alpha) as the
 // paper's method and meshed by the same marching cubes.
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -58,7 +59,13 @@ private:
 
 struct ImlsSummary {
     std::size_t points = 0, dropped = 0, candidates = 0, defined = 0;
+    std::size_t mesh_vertices = 0, mesh_triangles = 0;
     double seconds_normals = 0, seconds_field = 0, seconds_mesh = 0;
+    double radius = 0, bandwidth = 0;
+    int normal_k = 0;
+
+    /// One line: counts, per-stage times and the settings used (like ReconstructionSummary).
+    std::string to_string() const;
 };
 
 /// IMLS surface of one scan taken from `sensor`: normals, f on the lattice vertices within r of a
