@@ -3,6 +3,7 @@
 
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"

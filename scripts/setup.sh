@@ -12,6 +12,10 @@ PKGS=(
   liblzf-dev           # PCD binary_compressed (LZF)
   libgtest-dev         # unit tests
   libbenchmark-dev     # micro-benchmarks
+  libembree-dev        # ray casting: simulator and renderer
+  nlohmann-json3-dev   # sensor files (JSON), benchmark results
+  libpng-dev           # PNG pictures (render, demo)
+  python3-matplotlib   # benchmark plots (Fig. 6)
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
 )

@@ -11,6 +11,7 @@
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/io/point_reader.hpp"
 #include "lidarsurf/pipeline.hpp"
+#include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 #include "test_util.hpp"
 

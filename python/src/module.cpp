@@ -16,6 +16,7 @@
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
 #include "lidarsurf/pipeline.hpp"
+#include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/version.hpp"
 

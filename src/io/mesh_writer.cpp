@@ -113,6 +113,7 @@ Mesh read_mesh(const std::filesystem::path& path) {
         auto content = detail::parse_ply(data, name, true);
         mesh.vertices = std::move(content.vertices);
         mesh.triangles = std::move(content.triangles);
+        if (content.levels.size() == mesh.vertices.size()) mesh.levels = std::move(content.levels);
         return mesh;
     }
     std::string_view rest = data;

@@ -1,5 +1,6 @@
 #include "ply_format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -135,7 +136,7 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
         if (min_record > 0 && el.count > src.remaining_bytes() / min_record)
             throw FormatError(name + ": PLY header claims " + std::to_string(el.count) + " " + el.name +
                               " records but the file holds at most " + std::to_string(src.remaining_bytes() / min_record));
-        int ix = -1, iy = -1, iz = -1, iface = -1;
+        int ix = -1, iy = -1, iz = -1, iface = -1, ilevel = -1;
         for (std::size_t i = 0; i < el.props.size(); ++i) {
             const auto& p = el.props[i];
             if (p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index")) iface = static_cast<int>(i);
@@ -143,10 +144,12 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
             if (p.name == "x") ix = static_cast<int>(i);
             if (p.name == "y") iy = static_cast<int>(i);
             if (p.name == "z") iz = static_cast<int>(i);
+            if (p.name == "level") ilevel = static_cast<int>(i);
         }
         if (is_vertex) {
             if (ix < 0 || iy < 0 || iz < 0) throw FormatError(name + ": PLY vertex element lacks x, y or z");
             out.vertices.reserve(el.count);
+            if (ilevel >= 0) out.levels.reserve(el.count);
             have_vertex = true;
         }
         if (is_face && iface < 0) throw FormatError(name + ": PLY face element lacks vertex_indices");
@@ -173,6 +176,8 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
                     if (static_cast<int>(i) == ix) xyz.x() = v;
                     if (static_cast<int>(i) == iy) xyz.y() = v;
                     if (static_cast<int>(i) == iz) xyz.z() = v;
+                    if (is_vertex && static_cast<int>(i) == ilevel)
+                        out.levels.push_back(static_cast<std::uint8_t>(std::clamp(std::isfinite(v) ? v : 0.0, 0.0, 255.0)));
                 }
             }
             if (is_vertex) out.vertices.push_back(xyz);

@@ -13,6 +13,7 @@ namespace lidarsurf::detail {
 struct PlyContent {
     std::vector<Eigen::Vector3d> vertices;
     std::vector<std::array<std::uint32_t, 3>> triangles;  ///< polygons fanned into triangles
+    std::vector<std::uint8_t> levels;                     ///< the vertex property `level` (k'), when present
 };
 
 /// Parses a PLY buffer; faces are read only when `want_faces`.

@@ -2,42 +2,214 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
+
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+
+#include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf::sim {
+namespace {
+
+std::vector<double> even_beams(int beams, double top_deg, double bottom_deg) {
+    std::vector<double> e;
+    for (int i = 0; i < beams; ++i) e.push_back(beams == 1 ? top_deg : top_deg + (bottom_deg - top_deg) * i / (beams - 1));
+    return e;
+}
+
+/// splitmix64: a counter-based generator, so ray i gets the same draws on any thread.
+std::uint64_t mix(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+double unit(std::uint64_t x) { return static_cast<double>(x >> 11) * 0x1.0p-53; }  // [0, 1)
+
+}  // namespace
+
+void SensorModel::validate() const {
+    if (elevations_deg.empty()) throw InvalidArgument("sensor '" + name + "': no beam");
+    if (elevations_deg.size() > 4096) throw InvalidArgument("sensor '" + name + "': more than 4096 beams");
+    for (double e : elevations_deg)
+        if (!std::isfinite(e) || e < -90 || e > 90) throw InvalidArgument("sensor '" + name + "': beam elevation outside [-90, 90] deg");
+    if (!(azimuth_step_deg >= 0.001 && azimuth_step_deg <= 360))
+        throw InvalidArgument("sensor '" + name + "': azimuth step must be in [0.001, 360] deg");
+    if (!(min_range >= 0 && max_range > min_range && std::isfinite(max_range)))
+        throw InvalidArgument("sensor '" + name + "': ranges must satisfy 0 <= min_range < max_range");
+    if (!(range_noise >= 0 && range_noise < 10)) throw InvalidArgument("sensor '" + name + "': range noise must be in [0, 10) m");
+    if (!(dropout >= 0 && dropout < 1)) throw InvalidArgument("sensor '" + name + "': dropout must be in [0, 1)");
+    if (!(std::fabs(mount_height) < 100)) throw InvalidArgument("sensor '" + name + "': mount height must be finite, |h| < 100 m");
+}
+
+std::size_t SensorModel::rays_per_revolution() const {
+    return static_cast<std::size_t>(std::lround(360.0 / azimuth_step_deg)) * elevations_deg.size();
+}
 
 SensorModel SensorModel::hdl64() {
     SensorModel s;
-    for (int i = 0; i < 64; ++i) s.elevations_deg.push_back(2.0 - 26.8 * i / 63.0);
+    s.name = "hdl64";
+    s.elevations_deg = even_beams(64, 2.0, -24.8);
+    s.dropout = 0.02;
     return s;
 }
 
-SensorModel SensorModel::ground_truth() {
+SensorModel SensorModel::vlp16() {
     SensorModel s;
-    for (int i = 0; i < 316; ++i) s.elevations_deg.push_back(2.0 - 26.8 * i / 315.0);
-    s.azimuth_step_deg = 0.09;
-    s.range_noise = 0.0;
+    s.name = "vlp16";
+    s.elevations_deg = even_beams(16, 15.0, -15.0);
+    s.azimuth_step_deg = 0.2;
+    s.max_range = 100.0;
+    s.range_noise = 0.03;
+    s.dropout = 0.02;
     return s;
 }
 
-PointCloud simulate_scan(const AnalyticScene& scene, const SensorModel& sensor, const Eigen::Vector3d& origin,
-                         std::uint64_t seed) {
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> noise(0.0, sensor.range_noise);
-    PointCloud cloud;
-    const int steps = static_cast<int>(std::lround(360.0 / sensor.azimuth_step_deg));
-    const double deg = std::numbers::pi / 180.0;
-    for (int a = 0; a < steps; ++a) {
-        const double az = a * sensor.azimuth_step_deg * deg;
-        for (double el_deg : sensor.elevations_deg) {
-            const double el = el_deg * deg;
-            const Eigen::Vector3d dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-            const auto range = scene.intersect(origin, dir, sensor.max_range);
-            const double n = sensor.range_noise > 0 ? noise(rng) : 0.0;  // drawn for every ray: stable stream
-            if (!range || *range < sensor.min_range) continue;
-            cloud.points.push_back(origin + (*range + n) * dir);
-        }
+SensorModel SensorModel::hdl32() {
+    SensorModel s;
+    s.name = "hdl32";
+    s.elevations_deg = even_beams(32, 10.67, -30.67);
+    s.azimuth_step_deg = 0.16;
+    s.max_range = 100.0;
+    s.dropout = 0.02;
+    return s;
+}
+
+SensorModel SensorModel::os1_128() {
+    SensorModel s;
+    s.name = "os1-128";
+    s.elevations_deg = even_beams(128, 22.5, -22.5);
+    s.azimuth_step_deg = 360.0 / 2048.0;
+    s.min_range = 0.3;
+    s.range_noise = 0.03;
+    s.dropout = 0.02;
+    return s;
+}
+
+SensorModel SensorModel::ground_truth() { return ground_truth_for(hdl64(), 316); }
+
+SensorModel SensorModel::ground_truth_for(const SensorModel& sensor, int beams) {
+    if (beams < 1 || beams > 4096) throw InvalidArgument("ground-truth beams must be in [1, 4096]");
+    sensor.validate();
+    double top = sensor.elevations_deg.front(), bottom = top;
+    for (double e : sensor.elevations_deg) {
+        top = std::max(top, e);
+        bottom = std::min(bottom, e);
     }
+    SensorModel s = sensor;
+    s.name = sensor.name + "-gt" + std::to_string(beams);
+    s.elevations_deg = even_beams(beams, top, bottom);
+    s.azimuth_step_deg = std::min(0.09, sensor.azimuth_step_deg / 2);
+    s.range_noise = 0.0;
+    s.dropout = 0.0;
+    return s;
+}
+
+std::vector<std::string> SensorModel::preset_names() { return {"hdl64", "vlp16", "hdl32", "os1-128", "gt316"}; }
+
+SensorModel SensorModel::preset(std::string_view name) {
+    if (name == "hdl64") return hdl64();
+    if (name == "vlp16") return vlp16();
+    if (name == "hdl32") return hdl32();
+    if (name == "os1-128" || name == "os1_128") return os1_128();
+    if (name == "gt316") return ground_truth();
+    std::string list;
+    for (const auto& n : preset_names()) list += (list.empty() ? "" : ", ") + n;
+    throw InvalidArgument("unknown sensor '" + std::string(name) + "' (presets: " + list + ", or a .json file)");
+}
+
+SensorModel SensorModel::from_json(std::string_view text) {
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        throw FormatError(std::string("sensor JSON: ") + e.what());
+    }
+    if (!j.is_object()) throw FormatError("sensor JSON: expected an object");
+    SensorModel s;
+    s.elevations_deg.clear();
+    try {
+        for (const auto& [key, value] : j.items()) {
+            if (key == "name") s.name = value.get<std::string>();
+            else if (key == "elevations_deg") s.elevations_deg = value.get<std::vector<double>>();
+            else if (key == "azimuth_step_deg") s.azimuth_step_deg = value.get<double>();
+            else if (key == "min_range") s.min_range = value.get<double>();
+            else if (key == "max_range") s.max_range = value.get<double>();
+            else if (key == "range_noise") s.range_noise = value.get<double>();
+            else if (key == "dropout") s.dropout = value.get<double>();
+            else if (key == "mount_height") s.mount_height = value.get<double>();
+            else if (key != "beams" && key != "elevation_max_deg" && key != "elevation_min_deg")
+                throw FormatError("sensor JSON: unknown field '" + key + "'");
+        }
+        if (j.contains("beams")) {
+            if (!s.elevations_deg.empty()) throw FormatError("sensor JSON: give either elevations_deg or beams, not both");
+            if (!j.contains("elevation_max_deg") || !j.contains("elevation_min_deg"))
+                throw FormatError("sensor JSON: beams needs elevation_max_deg and elevation_min_deg");
+            const int beams = j.at("beams").get<int>();
+            if (beams < 1 || beams > 4096) throw InvalidArgument("sensor JSON: beams must be in [1, 4096]");
+            s.elevations_deg = even_beams(beams, j.at("elevation_max_deg").get<double>(), j.at("elevation_min_deg").get<double>());
+        }
+    } catch (const nlohmann::json::exception& e) {
+        throw FormatError(std::string("sensor JSON: ") + e.what());
+    }
+    s.validate();
+    return s;
+}
+
+std::string SensorModel::to_json() const {
+    nlohmann::json j = {{"name", name},
+                        {"elevations_deg", elevations_deg},
+                        {"azimuth_step_deg", azimuth_step_deg},
+                        {"min_range", min_range},
+                        {"max_range", max_range},
+                        {"range_noise", range_noise},
+                        {"dropout", dropout},
+                        {"mount_height", mount_height}};
+    return j.dump(2) + "\n";
+}
+
+PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const Eigen::Isometry3d& pose, std::uint64_t seed) {
+    sensor.validate();
+    const auto steps = static_cast<std::size_t>(std::lround(360.0 / sensor.azimuth_step_deg));
+    const std::size_t beams = sensor.elevations_deg.size();
+    const double deg = std::numbers::pi / 180.0;
+    const Eigen::Matrix3d rot = pose.linear();
+    const Eigen::Vector3d origin = pose.translation();
+    std::vector<Eigen::Vector3d> hits(steps * beams);
+    std::vector<std::uint8_t> valid(steps * beams, 0);
+    const std::uint64_t key = mix(seed);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, steps, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t a = r.begin(); a != r.end(); ++a) {
+            const double az = static_cast<double>(a) * sensor.azimuth_step_deg * deg;
+            for (std::size_t b = 0; b < beams; ++b) {
+                const std::size_t ray = a * beams + b;
+                const double el = sensor.elevations_deg[b] * deg;
+                const Eigen::Vector3d local(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+                const auto range = scene.intersect(origin, rot * local, sensor.max_range);
+                if (!range || *range < sensor.min_range) continue;
+                const std::uint64_t r0 = mix(key ^ (2 * ray)), r1 = mix(key ^ (2 * ray + 1));
+                if (sensor.dropout > 0 && unit(mix(r0 ^ r1)) < sensor.dropout) continue;
+                double noisy = *range;
+                if (sensor.range_noise > 0) {  // Box-Muller
+                    const double u1 = 1.0 - unit(r0), u2 = unit(r1);
+                    noisy += sensor.range_noise * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+                }
+                hits[ray] = noisy * local;
+                valid[ray] = 1;
+            }
+        }
+    });
+    PointCloud cloud;
+    for (std::size_t i = 0; i < hits.size(); ++i)
+        if (valid[i]) cloud.points.push_back(hits[i]);
+    return cloud;
+}
+
+PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const Eigen::Vector3d& origin, std::uint64_t seed) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = origin;
+    PointCloud cloud = simulate_scan(scene, sensor, pose, seed);
+    for (auto& p : cloud.points) p += origin;
     return cloud;
 }
 

@@ -11,6 +11,7 @@
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/mesh/mesh_distance.hpp"
+#include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 
 using namespace lidarsurf;

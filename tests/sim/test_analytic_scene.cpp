@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 
 using namespace lidarsurf;

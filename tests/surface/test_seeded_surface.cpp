@@ -8,6 +8,7 @@
 
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/pipeline.hpp"
+#include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 

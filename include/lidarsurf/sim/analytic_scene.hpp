@@ -8,6 +8,8 @@
 
 #include <Eigen/Core>
 
+#include "lidarsurf/sim/ray_scene.hpp"
+
 namespace lidarsurf::sim {
 
 struct GroundRect {  ///< horizontal rectangle z = height, |x - cx| <= hx, |y - cy| <= hy
@@ -20,7 +22,7 @@ struct Cylinder {  ///< vertical solid cylinder with caps
     double cx = 0, cy = 0, radius = 1, z0 = 0, z1 = 1;
 };
 
-class AnalyticScene {
+class AnalyticScene final : public RayScene {
 public:
     std::vector<GroundRect> grounds;
     std::vector<Box> boxes;
@@ -28,7 +30,7 @@ public:
 
     /// Range along the unit direction `dir` to the first surface hit from `origin` within
     /// (0, max_range], or nullopt.
-    std::optional<double> intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range) const;
+    std::optional<double> intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range) const override;
 
     /// Unsigned distance from p to the nearest primitive surface.
     double distance(const Eigen::Vector3d& p) const;

@@ -1,0 +1,137 @@
+// Helpers shared by the lidarsurf subcommands.
+#include "cli_common.hpp"
+
+#include <cctype>
+#include <fstream>
+#include <sstream>
+
+#include "lidarsurf/io/atomic_file.hpp"
+#include "lidarsurf/eval/benchmark.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lidarsurf::cli {
+
+Eigen::Vector3d parse_vec3(const std::string& text, const char* what) {
+    std::stringstream ss(text);
+    Eigen::Vector3d v;
+    std::string item;
+    int i = 0;
+    while (std::getline(ss, item, ',')) {
+        if (i == 3) break;
+        try {
+            std::size_t used = 0;
+            v[i] = std::stod(item, &used);
+            if (used != item.size()) throw std::invalid_argument(item);
+        } catch (const std::exception&) {
+            throw InvalidArgument(std::string(what) + " must be three numbers x,y,z (got '" + text + "')");
+        }
+        ++i;
+    }
+    if (i != 3 || ss.rdbuf()->in_avail() > 0 || !v.allFinite())
+        throw InvalidArgument(std::string(what) + " must be three finite numbers x,y,z (got '" + text + "')");
+    return v;
+}
+
+void refuse_overwriting_input(const fs::path& input, const fs::path& output) {
+    std::error_code ec;
+    if (fs::exists(output, ec) && fs::equivalent(input, output, ec))
+        throw InvalidArgument("output '" + output.string() + "' is the input file; refusing to overwrite it");
+}
+
+// 2: the user's arguments; 3: the data; 4: the file system.
+int exit_code(const Error& e) {
+    if (dynamic_cast<const InvalidArgument*>(&e)) return 2;
+    if (dynamic_cast<const FormatError*>(&e) || dynamic_cast<const InvalidInput*>(&e)) return 3;
+    if (dynamic_cast<const IoError*>(&e)) return 4;
+    return 1;
+}
+
+
+void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
+    ReconstructionConfig& c = o.config;
+    app->add_option("--method", o.method, "paper (Roldao et al., --mode selects the variant) | imls (baseline)")->capture_default_str();
+    app->add_option("--voxel", c.voxel_size, "Voxel size alpha in metres")->capture_default_str();
+    app->add_option("--tau", c.tau, "Gaussian confidence threshold tau, Eq. (3)")->capture_default_str();
+    app->add_option("--nmin", c.n_min, "Minimum points N_min in a neighbourhood, Eq. (1)")->capture_default_str();
+    app->add_option("--kmax", c.k_max, "Largest neighbourhood level k_max (adaptive modes)")->capture_default_str();
+    app->add_option("--k", c.k, "Neighbourhood level k (constant modes cn, cn+gc)")->capture_default_str();
+    app->add_option("--mode", o.mode, "an+gc | an | cn+gc | cn (Sec. IV-B)")->capture_default_str();
+    app->add_option("--origin", o.origin, "Sensor position x,y,z (orients the normals, Eq. 2)")->capture_default_str();
+    app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = paper-literal)")->capture_default_str();
+    app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)")->capture_default_str();
+    app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)")->capture_default_str();
+    app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel")->capture_default_str();
+    app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
+    app->add_option("--bin-fields", o.bin_fields, "float32 values per point in .bin input (KITTI 4, nuScenes 5)")->capture_default_str();
+    auto given = [](bool& flag) { return [&flag](const std::string&) { flag = true; }; };
+    app->add_option("--imls-radius", o.imls.radius, "IMLS support radius r in metres (default alpha * k_max)")->each(given(o.imls_radius));
+    app->add_option("--imls-k", o.imls.normal_k, "IMLS neighbours for the normals (default N_min)")->each(given(o.imls_k));
+    app->add_option("--imls-h", o.imls.bandwidth, "IMLS Gaussian bandwidth h in metres (default r / 3)")->each(given(o.imls_h));
+    app->add_option("--imls-truncation", o.imls.truncation_voxels, "IMLS truncation in voxels (default 0 = none, as the paper)")
+        ->each(given(o.imls_truncation));
+}
+
+
+Method resolve_method(const ReconstructOptions& o) {
+    Method m;
+    m.config = o.config;
+    m.config.mode = parse_mode(o.mode);
+    m.config.validate();
+    if (o.method == "imls") m.imls = true;
+    else if (o.method != "paper") throw InvalidArgument("unknown method '" + o.method + "' (expected paper or imls)");
+    m.imls_config = ImlsConfig::matching(m.config);
+    if (o.imls_radius) {
+        m.imls_config.radius = o.imls.radius;
+        m.imls_config.bandwidth = o.imls.radius / 3.0;
+    }
+    if (o.imls_k) m.imls_config.normal_k = o.imls.normal_k;
+    if (o.imls_h) m.imls_config.bandwidth = o.imls.bandwidth;
+    if (o.imls_truncation) m.imls_config.truncation_voxels = o.imls.truncation_voxels;
+    m.imls_config.validate();
+    m.sensor = parse_vec3(o.origin, "--origin");
+    m.read.format = parse_point_format(o.format);
+    m.read.bin_fields = o.bin_fields;
+    return m;
+}
+
+std::string method_name(const Method& m) { return m.imls ? "imls" : "mode " + std::string(to_string(m.config.mode)); }
+
+// Runs the chosen method; `summary` receives one line of counts and times.
+Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary) {
+    const BenchmarkMethod row{method_name(m), m.imls, m.config, m.imls_config};
+    Mesh mesh = run_benchmark_method(row, cloud, m.sensor, &summary);
+    if (mesh.empty())
+        throw InvalidInput("the reconstruction produced no triangle (" + summary + "); the cloud may be too sparse for n_min=" +
+                           std::to_string(m.config.n_min) + " at voxel size " + std::to_string(m.config.voxel_size));
+    return mesh;
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void write_text(const std::string& path, const std::string& text) {
+    AtomicFile file(path);
+    file.stream() << text;
+    file.commit();
+}
+
+
+std::string extension_of(const fs::path& path) {
+    std::string ext = path.extension().string();
+    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return ext;
+}
+
+std::string read_text_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path.string() + ": cannot open for reading");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) throw IoError(path.string() + ": read error");
+    return ss.str();
+}
+
+}  // namespace lidarsurf::cli

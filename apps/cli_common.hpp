@@ -1,0 +1,56 @@
+#pragma once
+// Helpers shared by the lidarsurf subcommands (apps/ only; the library never prints or exits).
+#include <chrono>
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "lidarsurf/baselines/imls.hpp"
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/pipeline.hpp"
+
+namespace lidarsurf::cli {
+
+/// "x,y,z" -> vector; InvalidArgument naming `what` otherwise.
+Eigen::Vector3d parse_vec3(const std::string& text, const char* what);
+/// InvalidArgument if `output` exists and is the same file as `input`.
+void refuse_overwriting_input(const std::filesystem::path& input, const std::filesystem::path& output);
+/// 2: the user's arguments; 3: the data; 4: the file system; 1: anything else.
+int exit_code(const Error& e);
+
+/// Options shared by `reconstruct`, `evaluate --holdout` and `benchmark`.
+struct ReconstructOptions {
+    std::string format = "auto", origin = "0,0,0", mode = "an+gc", method = "paper";
+    int bin_fields = 4;
+    ReconstructionConfig config;  // paper defaults, defined once in ReconstructionConfig
+    ImlsConfig imls;              // only the fields given on the command line are used
+    bool imls_radius = false, imls_k = false, imls_h = false, imls_truncation = false;
+};
+void add_reconstruct_options(CLI::App* app, ReconstructOptions& o);
+
+/// The method and its settings, validated before any file is read.
+struct Method {
+    bool imls = false;
+    ReconstructionConfig config;
+    ImlsConfig imls_config;
+    Eigen::Vector3d sensor = Eigen::Vector3d::Zero();
+    PointReadOptions read;
+};
+Method resolve_method(const ReconstructOptions& o);
+std::string method_name(const Method& m);
+/// Runs the chosen method; `summary` receives one line of counts and times. InvalidInput when
+/// the reconstruction is empty.
+Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary);
+
+double ms_since(std::chrono::steady_clock::time_point t0);
+/// Lower-case extension with the dot (".ply"), "" when none.
+std::string extension_of(const std::filesystem::path& path);
+/// The whole file; IoError when it cannot be read.
+std::string read_text_file(const std::filesystem::path& path);
+/// Writes `text` to `path` atomically.
+void write_text(const std::string& path, const std::string& text);
+
+}  // namespace lidarsurf::cli

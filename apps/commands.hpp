@@ -1,0 +1,40 @@
+#pragma once
+// The subcommands beyond reconstruct/evaluate: each adds itself to the app and runs from its
+// options. Errors are thrown as lidarsurf exceptions; main() maps them to exit codes.
+#include <cstdint>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "cli_common.hpp"
+
+namespace lidarsurf::cli {
+
+struct SimulateOptions {
+    std::string scene = "town", sensor = "hdl64", output, gt, from, to;
+    int frames = 100, gt_beams = 316, moving_cars = 3;
+    double length = 240.0;
+    std::uint64_t seed = 1;
+};
+CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o);
+int run_simulate(const SimulateOptions& o);
+
+struct RenderOptions {
+    std::string input, output, colour = "height", eye, target;
+    int width = 1280, height = 720;
+    double fov = 55.0;
+};
+CLI::App* add_render_command(CLI::App& app, RenderOptions& o);
+int run_render(const RenderOptions& o);
+
+struct BenchmarkOptions {
+    std::string dir, out, methods;
+    int frames = 0, stride = 1;
+    bool no_plots = false, literal = false;
+    double max_range = 0;
+    ReconstructionConfig config;  // alpha, tau, N_min, guards, threads; the rows set mode and k
+};
+CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o);
+int run_benchmark(const BenchmarkOptions& o);
+
+}  // namespace lidarsurf::cli

@@ -1,0 +1,79 @@
+#pragma once
+// The paper's benchmark (Table I, Fig. 6): every method row run on every frame, the evaluation of
+// each frame averaged over the sequence. The frame loop (reading files) is the caller's; this
+// module names the rows, runs one, and aggregates and formats the results.
+#include <string>
+#include <vector>
+
+#include "lidarsurf/baselines/imls.hpp"
+#include "lidarsurf/eval/metrics.hpp"
+#include "lidarsurf/io/point_cloud.hpp"
+#include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/surface/config.hpp"
+
+namespace lidarsurf {
+
+/// One row: the paper's method in some mode, or the IMLS baseline.
+struct BenchmarkMethod {
+    std::string name;  ///< as in Table I, e.g. "AN+GC kmax=5", "CN k=1", "IMLS"
+    bool imls = false;
+    ReconstructionConfig config;
+    ImlsConfig imls_config;
+};
+
+/// Table I's rows with `base`'s other settings: AN+GC and AN with k_max 5 and 3, CN+GC and CN
+/// with k 5, 3 and 1, then IMLS (radius alpha * k_max, k = N_min, h = r / 3).
+std::vector<BenchmarkMethod> table_one_methods(const ReconstructionConfig& base);
+
+/// Reconstructs `cloud` (sensor at `sensor`) with the row's method. `summary` gets one line of
+/// counts and times. Returns the mesh, possibly empty.
+Mesh run_benchmark_method(const BenchmarkMethod& method, const PointCloud& cloud, const Eigen::Vector3d& sensor,
+                          std::string* summary = nullptr);
+
+/// One row's results averaged over the frames it produced a mesh for.
+struct MethodAggregate {
+    std::string name;
+    std::size_t frames = 0;      ///< frames evaluated
+    std::size_t empty = 0;       ///< frames where the method produced no triangle (not averaged)
+    double seconds = 0;          ///< mean reconstruction time per frame
+    double vertices = 0, triangles = 0;
+    DirectedError p_to_gt, gt_to_p;  ///< mean over frames of each field (count: total)
+    double ae_sym = 0, hd_sym = 0, share_within_delta = 0;
+    double accuracy = 0, completeness = 0, chamfer_l1 = 0, precision = 0, recall = 0, fscore = 0;
+    std::vector<double> curve_delta, curve_share;  ///< mean share per delta over frames (Fig. 6b)
+    std::vector<RangeBin> by_range;                ///< AE P->GT per range bin over all vertices (Fig. 6a)
+};
+
+struct BenchmarkResult {
+    std::string dataset;         ///< what was measured (a directory, a scene name)
+    std::size_t frames = 0;      ///< frames in the run
+    double delta = 0, threshold = 0;
+    std::vector<MethodAggregate> methods;
+};
+
+/// Sums per-frame evaluations, then averages.
+class BenchmarkAccumulator {
+public:
+    explicit BenchmarkAccumulator(std::vector<std::string> method_names);
+    void add(std::size_t method, const EvaluationResult& result, double seconds);
+    void add_empty(std::size_t method);
+    BenchmarkResult finish(std::string dataset, std::size_t frames) const;
+
+private:
+    struct Sum {
+        MethodAggregate agg;
+        std::vector<double> range_sum;
+        std::vector<std::size_t> range_count;
+    };
+    std::vector<Sum> sums_;
+    double delta_ = 0, threshold_ = 0;
+};
+
+/// Table I's layout (AE and HD: P->GT, GT->P, sym) followed by the surface metrics and times.
+std::string format_table_one(const BenchmarkResult& result);
+/// One line per method, every averaged scalar.
+std::string to_csv(const BenchmarkResult& result);
+/// Everything, including the curves and the range bins (input of the plotting script).
+std::string to_json(const BenchmarkResult& result);
+
+}  // namespace lidarsurf

@@ -1,0 +1,44 @@
+#pragma once
+// Builds closed triangle meshes of simple solids (boxes, cylinders, ellipsoids, cones) and open
+// height fields: the parts of the procedural scenes. Triangles are counter-clockwise seen from
+// outside, so face normals point out of the solid.
+#include <functional>
+
+#include <Eigen/Core>
+
+#include "lidarsurf/mesh/mesh.hpp"
+
+namespace lidarsurf::sim {
+
+class MeshBuilder {
+public:
+    /// Box centred at `centre` with half extents `half` (along its own axes), turned by `yaw`
+    /// radians about +z.
+    void box(const Eigen::Vector3d& centre, const Eigen::Vector3d& half, double yaw = 0);
+    /// Axis-aligned box from its two corners.
+    void box_between(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi);
+    /// Capped cylinder from `a` to `b` with the given radius, `segments` sides.
+    void cylinder(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius, int segments = 12);
+    /// Capped cone: base disc at `base` (radius), apex at `apex`.
+    void cone(const Eigen::Vector3d& base, const Eigen::Vector3d& apex, double radius, int segments = 12);
+    /// Ellipsoid with semi-axes `radii` along x, y, z; `rings` latitude bands.
+    void ellipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& radii, int rings = 8);
+    /// Open height field z = height(x, y) over [x0, x1] x [y0, y1] with the given cell size,
+    /// facing +z.
+    void height_field(double x0, double x1, double y0, double y1, double cell,
+                      const std::function<double(double, double)>& height);
+    /// Appends another mesh (vertices and triangles only).
+    void append(const Mesh& other);
+
+    const Mesh& mesh() const { return mesh_; }
+    Mesh take() { return std::move(mesh_); }
+
+private:
+    std::uint32_t vertex(const Eigen::Vector3d& p);
+    void triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c);
+    void quad(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d);  ///< a b c d counter-clockwise
+
+    Mesh mesh_;
+};
+
+}  // namespace lidarsurf::sim

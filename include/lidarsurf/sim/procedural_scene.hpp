@@ -1,0 +1,68 @@
+#pragma once
+// Procedural worlds for the simulator, seeded and deterministic (the same seed gives the same
+// triangles on every platform: the generator draws from its own counter-based stream).
+//  - town: a straight street with curbs and sidewalks, two cross streets, buildings with facade
+//    detail (recessed windows between floor bands and pillars, balconies with railings, varied
+//    heights), walls and fences, parked cars and vans (body, cabin, wheels), cars driving in the
+//    opposite lane, lampposts, traffic signs (thin plates on poles) and trees (trunk + canopy);
+//  - offroad: hilly terrain with a winding track, rocks, bushes, broadleaf and conifer trees and
+//    a fence line.
+// A World also carries the drive: a ground path the sensor rig follows.
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "lidarsurf/mesh/mesh.hpp"
+
+namespace lidarsurf::sim {
+
+enum class SceneKind { Town, Offroad };
+
+SceneKind parse_scene_kind(std::string_view name);  ///< "town" or "offroad"; InvalidArgument otherwise
+const char* to_string(SceneKind kind);
+
+struct SceneConfig {
+    SceneKind kind = SceneKind::Town;
+    std::uint64_t seed = 1;
+    double length = 240.0;    ///< metres of street / track along x
+    int moving_cars = 3;      ///< town: cars in the opposite lane
+    double ego_speed = 8.0;   ///< m/s of the sensor rig along the path (sets the frame times)
+
+    void validate() const;
+};
+
+/// A rigid object that moves in a straight line at constant speed, wrapping along the street.
+struct Mover {
+    Mesh body;                  ///< in its own frame, x forward
+    Eigen::Vector3d start;      ///< position at t = 0
+    double speed = 0;           ///< m/s along x (negative: driving towards -x)
+    double x_min = 0, x_max = 0;  ///< the street span it wraps within
+    Eigen::Vector3d position_at(double t) const;
+};
+
+struct World {
+    SceneConfig config;
+    Mesh static_mesh;                ///< everything that does not move
+    std::vector<Mover> movers;
+    std::vector<Eigen::Vector3d> path;  ///< ground points of the drive, in order (polyline)
+
+    double path_length() const;
+    /// The ground point at arc length fraction s in [0, 1] and the unit tangent there.
+    void path_at(double s, Eigen::Vector3d& point, Eigen::Vector3d& tangent) const;
+    /// Sensor-to-world pose at fraction s: `mount_height` above the path, x along the tangent
+    /// (pitch follows the slope), z up, no roll.
+    Eigen::Isometry3d pose_at(double s, double mount_height) const;
+    /// Time (s) at which the rig is at fraction s, at config.ego_speed.
+    double time_at(double s) const;
+    /// The moving objects at time t, as one mesh (empty when there are none).
+    Mesh movers_at(double t) const;
+    /// The whole scene at time t: static mesh + movers.
+    Mesh scene_at(double t) const;
+};
+
+World make_world(const SceneConfig& config);
+
+}  // namespace lidarsurf::sim

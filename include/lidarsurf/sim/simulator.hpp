@@ -1,0 +1,52 @@
+#pragma once
+// Drives a sensor through a World: frame i of n is taken at the fraction i / (n - 1) of the drive
+// (the paper's "100 equi-sampled frames"), with the moving objects where they are at that time.
+// Each frame has the noisy scan and, optionally, the co-located noise-free ground-truth scan.
+#include <cstdint>
+
+#include "lidarsurf/io/point_cloud.hpp"
+#include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/sim/mesh_scene.hpp"
+#include "lidarsurf/sim/procedural_scene.hpp"
+#include "lidarsurf/sim/sensor_model.hpp"
+
+namespace lidarsurf::sim {
+
+struct SimulatorConfig {
+    int frames = 100;
+    SensorModel sensor = SensorModel::hdl64();
+    int gt_beams = 316;          ///< beams of the ground-truth sensor (0 = no ground truth)
+    std::uint64_t seed = 1;      ///< noise seed; frame i uses a seed derived from it and i
+
+    void validate() const;
+};
+
+struct SimulatedFrame {
+    std::size_t index = 0;
+    double time = 0;             ///< seconds since the start of the drive
+    Eigen::Isometry3d pose;      ///< sensor-to-world
+    PointCloud scan;             ///< sensor frame
+    PointCloud ground_truth;     ///< sensor frame; empty when gt_beams = 0
+    Mesh movers;                 ///< the moving objects at `time`, world frame
+};
+
+class Simulator {
+public:
+    Simulator(World world, SimulatorConfig config);
+    std::size_t frame_count() const { return static_cast<std::size_t>(config_.frames); }
+    /// Fraction of the drive at which frame i is taken.
+    double fraction(std::size_t index) const;
+    /// Simulates frame `index` (< frame_count()). Thread-safe; parallel inside.
+    SimulatedFrame frame(std::size_t index) const;
+
+    const World& world() const { return world_; }
+    const SimulatorConfig& config() const { return config_; }
+    SensorModel ground_truth_sensor() const;
+
+private:
+    World world_;
+    SimulatorConfig config_;
+    MeshScene static_scene_;
+};
+
+}  // namespace lidarsurf::sim

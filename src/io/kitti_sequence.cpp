@@ -1,0 +1,73 @@
+#include "lidarsurf/io/kitti_sequence.hpp"
+
+#include <cstdio>
+#include <system_error>
+
+#include "byte_reader.hpp"
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/io/atomic_file.hpp"
+
+namespace lidarsurf {
+
+std::string KittiSequence::frame_name(std::size_t index) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%06zu", index);
+    return buf;
+}
+
+std::size_t KittiSequence::frame_count() const {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir / "velodyne", ec))
+        throw IoError(dir.string() + ": not a sequence directory (no velodyne/ folder)");
+    std::size_t n = 0;
+    while (std::filesystem::exists(scan(n), ec)) ++n;
+    return n;
+}
+
+std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path) {
+    const std::string data = detail::read_file(path.string());
+    std::string_view rest = data;
+    std::vector<Eigen::Isometry3d> poses;
+    std::size_t line_no = 0;
+    while (!rest.empty()) {
+        const std::string_view line = detail::next_line(rest);
+        ++line_no;
+        detail::Tokens tk(line);
+        std::string_view tok;
+        double v[12];
+        int n = 0;
+        while (tk.next(tok)) {
+            if (n == 12 || !detail::parse_double(tok, v[n]) || !std::isfinite(v[n]))
+                throw FormatError(path.string() + ": line " + std::to_string(line_no) + ": expected 12 finite numbers");
+            ++n;
+        }
+        if (n == 0) continue;  // blank line
+        if (n != 12) throw FormatError(path.string() + ": line " + std::to_string(line_no) + ": expected 12 numbers, got " + std::to_string(n));
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) pose.linear()(r, c) = v[4 * r + c];
+            pose.translation()[r] = v[4 * r + 3];
+        }
+        if (!(pose.linear().transpose() * pose.linear()).isApprox(Eigen::Matrix3d::Identity(), 1e-3))
+            throw FormatError(path.string() + ": line " + std::to_string(line_no) + ": the rotation is not orthonormal");
+        poses.push_back(pose);
+    }
+    return poses;
+}
+
+void write_poses(const std::vector<Eigen::Isometry3d>& poses, const std::filesystem::path& path) {
+    AtomicFile file(path);
+    auto& out = file.stream();
+    char buf[64];
+    for (const auto& pose : poses) {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) {
+                const double x = c < 3 ? pose.linear()(r, c) : pose.translation()[r];
+                std::snprintf(buf, sizeof(buf), "%.17g", x);
+                out << buf << ((r == 2 && c == 3) ? '\n' : ' ');
+            }
+    }
+    file.commit();
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,329 @@
+#include "lidarsurf/sim/procedural_scene.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/sim/mesh_builder.hpp"
+
+namespace lidarsurf::sim {
+namespace {
+
+/// splitmix64 stream: the same numbers on every platform (std distributions are not).
+class Rng {
+public:
+    explicit Rng(std::uint64_t seed) : state_(seed * 0x2545F4914F6CDD1Dull + 0x1234567ull) {}
+    std::uint64_t next() {
+        std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    double uniform(double lo, double hi) { return lo + (hi - lo) * (static_cast<double>(next() >> 11) * 0x1.0p-53); }
+    bool chance(double p) { return uniform(0, 1) < p; }
+
+private:
+    std::uint64_t state_;
+};
+
+using V = Eigen::Vector3d;
+
+// ---- Town -------------------------------------------------------------------------------
+constexpr double kRoadHalf = 5.0;      // carriageway |y| <= 5
+constexpr double kCurb = 0.15;         // curb height: sidewalks and lots are at z = 0.15
+constexpr double kSidewalkOuter = 9.0; // building line starts here
+constexpr double kLotBack = 40.0;      // the blocks end at |y| = 40
+constexpr double kCrossHalf = 5.0;     // cross streets are 10 m wide
+
+/// A car or a van in its own frame (x forward, on the ground at z = 0).
+Mesh car_body(Rng& rng) {
+    MeshBuilder b;
+    const bool van = rng.chance(0.2);
+    const double len = van ? rng.uniform(4.8, 5.4) : rng.uniform(3.9, 4.7);
+    const double wid = rng.uniform(1.7, 1.9), wheel_r = van ? 0.36 : 0.32;
+    const double hull_top = van ? 1.1 : rng.uniform(0.95, 1.05);
+    b.box_between({-len / 2, -wid / 2, 0.3}, {len / 2, wid / 2, hull_top});       // hull
+    if (van) {
+        b.box_between({-len / 2, -wid / 2 + 0.05, hull_top}, {len / 2 - 0.9, wid / 2 - 0.05, 2.1});  // box body
+    } else {
+        const double cab = rng.uniform(1.9, 2.4), back = rng.uniform(-0.5, 0.0);
+        b.box_between({back - cab / 2, -wid / 2 + 0.1, hull_top}, {back + cab / 2, wid / 2 - 0.1, hull_top + rng.uniform(0.4, 0.5)});
+    }
+    const double ax = len / 2 - 0.85;
+    for (double x : {-ax, ax})
+        for (double s : {-1.0, 1.0})
+            b.cylinder({x, s * (wid / 2 - 0.22), wheel_r}, {x, s * (wid / 2 + 0.0), wheel_r}, wheel_r, 14);
+    return b.take();
+}
+
+void place(MeshBuilder& b, const Mesh& body, const V& at, double yaw) {
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, V::UnitZ()).toRotationMatrix();
+    Mesh m = body;
+    for (auto& p : m.vertices) p = at + r * p;
+    b.append(m);
+}
+
+void building(MeshBuilder& b, Rng& rng, double x0, double x1, double side) {
+    const double setback = rng.uniform(0.0, 3.0), depth = rng.uniform(10.0, 16.0);
+    const double front = kSidewalkOuter + setback;  // |y| of the facade's outer line
+    const int floors = static_cast<int>(rng.uniform(2.0, 8.99));
+    const double floor_h = rng.uniform(2.9, 3.4), height = floors * floor_h + rng.uniform(0.3, 1.5);
+    const double recess = rng.uniform(0.2, 0.35), z0 = kCurb;
+    auto y_at = [&](double d) { return side * (front + d); };  // d = depth behind the facade line
+    auto slab = [&](double xa, double xb, double da, double db, double za, double zb) {
+        b.box_between({xa, std::min(y_at(da), y_at(db)), za}, {xb, std::max(y_at(da), y_at(db)), zb});
+    };
+    slab(x0, x1, recess, depth, z0, z0 + height);                                        // main block, recessed facade
+    for (int f = 0; f <= floors; ++f) {                                                  // floor bands
+        const double z = z0 + f * floor_h;
+        slab(x0, x1, 0.0, recess, f == 0 ? z0 : z - 0.15, std::min(z + (f == 0 ? 0.9 : 0.25), z0 + height));
+    }
+    const int bays = std::max(1, static_cast<int>((x1 - x0) / rng.uniform(2.8, 4.0)));
+    const double bay = (x1 - x0) / bays;
+    for (int i = 0; i <= bays; ++i) {                                                    // pillars
+        const double x = x0 + i * bay;
+        slab(std::max(x0, x - 0.25), std::min(x1, x + 0.25), 0.0, recess, z0, z0 + height);
+    }
+    if (floors >= 2 && rng.chance(0.45)) {                                               // balconies
+        for (int f = 1; f < floors; ++f)
+            for (int i = 0; i < bays; ++i) {
+                if (!rng.chance(0.5)) continue;
+                const double xa = x0 + i * bay + 0.4, xb = x0 + (i + 1) * bay - 0.4, z = z0 + f * floor_h;
+                if (xb - xa < 1.0) continue;
+                slab(xa, xb, -1.1, 0.0, z - 0.05, z + 0.12);                               // slab
+                slab(xa, xb, -1.1, -1.05, z + 0.12, z + 1.05);                             // railing plate
+            }
+    }
+    if (rng.chance(0.3)) slab(x0 + 0.5, x1 - 0.5, -1.6, 0.0, z0 + 2.6, z0 + 2.75);     // shop awning
+}
+
+void wall_or_fence(MeshBuilder& b, Rng& rng, double x0, double x1, double side) {
+    const double y = side * (kSidewalkOuter + 0.3);
+    if (rng.chance(0.5)) {
+        const double h = rng.uniform(1.2, 2.2);
+        b.box_between({x0, std::min(y, y + side * 0.25), kCurb}, {x1, std::max(y, y + side * 0.25), kCurb + h});
+        return;
+    }
+    const double h = rng.uniform(1.2, 1.8);
+    for (double x = x0; x <= x1 + 1e-9; x += 2.0) b.box_between({x - 0.04, y - 0.04, kCurb}, {x + 0.04, y + 0.04, kCurb + h});
+    for (double z : {0.35, h - 0.15}) b.box_between({x0, y - 0.02, kCurb + z}, {x1, y + 0.02, kCurb + z + 0.1});
+}
+
+void tree(MeshBuilder& b, Rng& rng, const V& ground, bool conifer) {
+    const double trunk_h = rng.uniform(2.2, 3.6), trunk_r = rng.uniform(0.12, 0.25);
+    const V top = ground + V(0, 0, trunk_h);
+    b.cylinder(ground, top, trunk_r, 10);
+    if (conifer) {
+        const double r = rng.uniform(1.2, 2.2), h = rng.uniform(4.0, 7.0);
+        b.cone(top - V(0, 0, 0.8), top + V(0, 0, h), r, 12);
+    } else {
+        const double rx = rng.uniform(1.4, 2.6), rz = rng.uniform(1.2, 2.2);
+        b.ellipsoid(top + V(0, 0, 0.6 * rz), {rx, rx * rng.uniform(0.8, 1.2), rz}, 8);
+    }
+}
+
+void lamppost(MeshBuilder& b, const V& ground, double toward_road) {
+    const V top = ground + V(0, 0, 7.0);
+    b.cylinder(ground, top, 0.09, 10);
+    const V tip = top + V(0, toward_road * 1.8, 0);
+    b.cylinder(top - V(0, 0, 0.05), tip - V(0, 0, 0.05), 0.05, 8);
+    b.box(tip - V(0, 0, 0.2), {0.3, 0.15, 0.08});
+}
+
+void traffic_sign(MeshBuilder& b, Rng& rng, const V& ground) {
+    const double h = rng.uniform(2.0, 2.6);
+    b.cylinder(ground, ground + V(0, 0, h), 0.04, 8);
+    const V c = ground + V(0, 0, h + 0.35);
+    if (rng.chance(0.5)) b.box(c, {0.015, 0.3, 0.3});                                  // square plate facing x
+    else b.cylinder(c - V(0.015, 0, 0), c + V(0.015, 0, 0), 0.32, 16);                 // round plate
+}
+
+void make_town(World& w, Rng& rng) {
+    MeshBuilder b;
+    const double half = w.config.length / 2;
+    const double cross[2] = {-w.config.length / 4, w.config.length / 4};
+    auto flat = [](double, double) { return 0.0; };
+    b.height_field(-half, half, -kRoadHalf, kRoadHalf, 5.0, flat);                        // carriageway
+    for (double cx : cross) b.height_field(cx - kCrossHalf, cx + kCrossHalf, -kLotBack, -kRoadHalf, 5.0, flat);
+    for (double cx : cross) b.height_field(cx - kCrossHalf, cx + kCrossHalf, kRoadHalf, kLotBack, 5.0, flat);
+    // Blocks between the cross streets, each side: a kerbed plateau with lots on it.
+    std::vector<std::pair<double, double>> blocks = {{-half, cross[0] - kCrossHalf}, {cross[0] + kCrossHalf, cross[1] - kCrossHalf},
+                                                     {cross[1] + kCrossHalf, half}};
+    for (double side : {-1.0, 1.0}) {
+        for (const auto& [bx0, bx1] : blocks) {
+            b.box_between({bx0, side > 0 ? kRoadHalf : -kLotBack, 0.0}, {bx1, side > 0 ? kLotBack : -kRoadHalf, kCurb});
+            double x = bx0 + rng.uniform(0.0, 2.0);
+            while (x < bx1 - 6.0) {
+                const double w_lot = std::min(rng.uniform(8.0, 20.0), bx1 - x);
+                if (rng.chance(0.18)) wall_or_fence(b, rng, x, x + w_lot, side);
+                else building(b, rng, x, x + w_lot, side);
+                x += w_lot + (rng.chance(0.3) ? rng.uniform(1.0, 4.0) : 0.0);
+            }
+            // Street furniture on the sidewalk.
+            for (double lx = bx0 + 6.0; lx < bx1 - 3.0; lx += 25.0) lamppost(b, {lx, side * (kRoadHalf + 0.6), kCurb}, -side);
+            for (double tx = bx0 + 12.0; tx < bx1 - 6.0; tx += rng.uniform(9.0, 15.0))
+                if (rng.chance(0.6)) tree(b, rng, {tx, side * rng.uniform(7.4, 8.2), kCurb}, false);
+            for (double sx = bx0 + 3.0; sx < bx1 - 3.0; sx += rng.uniform(30.0, 50.0))
+                traffic_sign(b, rng, {sx, side * (kRoadHalf + 0.45), kCurb});
+            // Parked cars along the curb, facing the traffic direction of their side.
+            for (double px = bx0 + 4.0; px < bx1 - 4.0; px += rng.uniform(5.8, 7.5))
+                if (rng.chance(0.55)) place(b, car_body(rng), {px, side * 3.9, 0.0}, side > 0 ? std::numbers::pi : 0.0);
+        }
+    }
+    w.static_mesh = b.take();
+    for (int i = 0; i < w.config.moving_cars; ++i) {
+        Mover m;
+        m.body = car_body(rng);
+        m.start = {-half + (i + 0.5) * w.config.length / w.config.moving_cars + rng.uniform(-10, 10), 1.75, 0.0};
+        m.speed = -rng.uniform(7.0, 12.0);
+        m.x_min = -half + 3;
+        m.x_max = half - 3;
+        w.movers.push_back(std::move(m));
+    }
+    const double margin = 35.0;
+    for (double x = -half + margin; x <= half - margin + 1e-9; x += 1.0) w.path.push_back({x, -1.75, 0.0});
+}
+
+// ---- Off-road ---------------------------------------------------------------------------
+struct Terrain {
+    double phase[3];
+    std::vector<V> hills;  // (x, y, amplitude); sigma fixed
+    double track(double x) const { return 4.0 * std::sin(x / 30.0 + phase[0]); }
+    double height(double x, double y) const {
+        double z = 1.5 * std::sin(x / 23.0 + phase[1]) + 1.0 * std::sin(y / 17.0 + x / 40.0 + phase[2]) +
+                   0.35 * std::sin((x + 2 * y) / 9.0);
+        for (const auto& h : hills) {
+            const double d2 = (x - h.x()) * (x - h.x()) + (y - h.y()) * (y - h.y());
+            z += h.z() * std::exp(-d2 / (2 * 12.0 * 12.0));
+        }
+        const double dy = y - track(x);
+        return z - 0.15 * std::exp(-dy * dy / 2.0);  // a worn track
+    }
+};
+
+void make_offroad(World& w, Rng& rng) {
+    MeshBuilder b;
+    const double half = w.config.length / 2, wide = 60.0;
+    Terrain t;
+    for (double& p : t.phase) p = rng.uniform(0, 2 * std::numbers::pi);
+    for (int i = 0; i < 10; ++i) t.hills.push_back({rng.uniform(-half, half), rng.uniform(-wide, wide), rng.uniform(-2.5, 3.5)});
+    b.height_field(-half, half, -wide, wide, 0.6, [&](double x, double y) { return t.height(x, y); });
+    auto off_track = [&](double x, double y, double clear) { return std::fabs(y - t.track(x)) > clear; };
+    auto on_ground = [&](double x, double y) { return V(x, y, t.height(x, y)); };
+    const int n_trees = static_cast<int>(w.config.length * 0.6), n_rocks = static_cast<int>(w.config.length * 0.35),
+              n_bushes = static_cast<int>(w.config.length * 0.5);
+    for (int i = 0; i < n_trees; ++i) {
+        const double x = rng.uniform(-half + 2, half - 2), y = rng.uniform(-wide + 2, wide - 2);
+        if (!off_track(x, y, 5.0)) continue;
+        tree(b, rng, on_ground(x, y) - V(0, 0, 0.2), rng.chance(0.5));
+    }
+    for (int i = 0; i < n_rocks; ++i) {
+        const double x = rng.uniform(-half + 2, half - 2), y = rng.uniform(-wide + 2, wide - 2);
+        if (!off_track(x, y, 3.5)) continue;
+        const double r = rng.uniform(0.3, 1.2);
+        b.ellipsoid(on_ground(x, y), {r * rng.uniform(0.8, 1.5), r * rng.uniform(0.8, 1.5), r * rng.uniform(0.5, 0.9)}, 6);
+    }
+    for (int i = 0; i < n_bushes; ++i) {
+        const double x = rng.uniform(-half + 2, half - 2), y = rng.uniform(-wide + 2, wide - 2);
+        if (!off_track(x, y, 3.0)) continue;
+        const double r = rng.uniform(0.4, 0.9);
+        b.ellipsoid(on_ground(x, y) + V(0, 0, 0.3 * r), {r, r * rng.uniform(0.8, 1.2), 0.7 * r}, 6);
+    }
+    // A fence line beside part of the track, following the ground.
+    const double fx0 = rng.uniform(-half + 10, -10), fx1 = fx0 + rng.uniform(40, 70), off = rng.chance(0.5) ? 6.0 : -6.0;
+    for (double x = fx0; x <= fx1; x += 2.5) {
+        const V g = on_ground(x, t.track(x) + off);
+        b.box_between(g + V(-0.05, -0.05, -0.2), g + V(0.05, 0.05, 1.3));
+        if (x + 2.5 <= fx1) {
+            const V g2 = on_ground(x + 2.5, t.track(x + 2.5) + off);
+            b.cylinder(g + V(0, 0, 1.0), g2 + V(0, 0, 1.0), 0.04, 6);
+        }
+    }
+    w.static_mesh = b.take();
+    const double margin = 35.0;
+    for (double x = -half + margin; x <= half - margin + 1e-9; x += 0.5) w.path.push_back(on_ground(x, t.track(x)));
+}
+
+}  // namespace
+
+SceneKind parse_scene_kind(std::string_view name) {
+    if (name == "town") return SceneKind::Town;
+    if (name == "offroad" || name == "off-road") return SceneKind::Offroad;
+    throw InvalidArgument("unknown scene '" + std::string(name) + "' (available: town, offroad, demo, or a .ply/.obj mesh)");
+}
+
+const char* to_string(SceneKind kind) { return kind == SceneKind::Town ? "town" : "offroad"; }
+
+void SceneConfig::validate() const {
+    if (!(length >= 80 && length <= 5000)) throw InvalidArgument("scene length must be in [80, 5000] m");
+    if (moving_cars < 0 || moving_cars > 100) throw InvalidArgument("moving cars must be in [0, 100]");
+    if (!(ego_speed > 0 && ego_speed <= 100)) throw InvalidArgument("ego speed must be in (0, 100] m/s");
+}
+
+Eigen::Vector3d Mover::position_at(double t) const {
+    const double span = x_max - x_min;
+    double x = std::fmod(start.x() - x_min + speed * t, span);
+    if (x < 0) x += span;
+    return {x_min + x, start.y(), start.z()};
+}
+
+double World::path_length() const {
+    double len = 0;
+    for (std::size_t i = 1; i < path.size(); ++i) len += (path[i] - path[i - 1]).norm();
+    return len;
+}
+
+void World::path_at(double s, Eigen::Vector3d& point, Eigen::Vector3d& tangent) const {
+    if (path.size() < 2) throw InvalidArgument("the world has no drive path");
+    const double target = std::clamp(s, 0.0, 1.0) * path_length();
+    double acc = 0;
+    for (std::size_t i = 1; i < path.size(); ++i) {
+        const double seg = (path[i] - path[i - 1]).norm();
+        if (acc + seg >= target || i + 1 == path.size()) {
+            const double f = seg > 0 ? std::clamp((target - acc) / seg, 0.0, 1.0) : 0.0;
+            point = path[i - 1] + f * (path[i] - path[i - 1]);
+            tangent = (path[i] - path[i - 1]).normalized();
+            return;
+        }
+        acc += seg;
+    }
+}
+
+Eigen::Isometry3d World::pose_at(double s, double mount_height) const {
+    Eigen::Vector3d p, t;
+    path_at(s, p, t);
+    const Eigen::Vector3d x = t, y = Eigen::Vector3d::UnitZ().cross(x).normalized(), z = x.cross(y);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear().col(0) = x;
+    pose.linear().col(1) = y;
+    pose.linear().col(2) = z;
+    pose.translation() = p + mount_height * Eigen::Vector3d::UnitZ();
+    return pose;
+}
+
+double World::time_at(double s) const { return std::clamp(s, 0.0, 1.0) * path_length() / config.ego_speed; }
+
+Mesh World::movers_at(double t) const {
+    MeshBuilder b;
+    for (const auto& m : movers) place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0);
+    return b.take();
+}
+
+Mesh World::scene_at(double t) const {
+    MeshBuilder b;
+    b.append(static_mesh);
+    b.append(movers_at(t));
+    return b.take();
+}
+
+World make_world(const SceneConfig& config) {
+    config.validate();
+    World w;
+    w.config = config;
+    Rng rng(config.seed);
+    if (config.kind == SceneKind::Town) make_town(w, rng);
+    else make_offroad(w, rng);
+    return w;
+}
+
+}  // namespace lidarsurf::sim

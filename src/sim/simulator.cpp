@@ -1,0 +1,67 @@
+#include "lidarsurf/sim/simulator.hpp"
+
+#include <algorithm>
+#include <optional>
+
+#include "lidarsurf/core/errors.hpp"
+
+namespace lidarsurf::sim {
+namespace {
+
+/// The first hit over two scenes: the static world and this frame's moving objects.
+class UnionScene final : public RayScene {
+public:
+    UnionScene(const RayScene& a, const RayScene* b) : a_(a), b_(b) {}
+    std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const override {
+        auto ha = a_.intersect(o, d, max_range);
+        if (!b_) return ha;
+        auto hb = b_->intersect(o, d, ha ? *ha : max_range);
+        if (hb && (!ha || *hb < *ha)) return hb;
+        return ha;
+    }
+
+private:
+    const RayScene& a_;
+    const RayScene* b_;
+};
+
+std::uint64_t frame_seed(std::uint64_t seed, std::size_t index) {
+    std::uint64_t x = seed * 0x9E3779B97F4A7C15ull + index + 1;
+    x = (x ^ (x >> 31)) * 0xBF58476D1CE4E5B9ull;
+    return x ^ (x >> 29);
+}
+
+}  // namespace
+
+void SimulatorConfig::validate() const {
+    if (frames < 1 || frames > 100000) throw InvalidArgument("frames must be in [1, 100000]");
+    if (gt_beams < 0 || gt_beams > 4096) throw InvalidArgument("ground-truth beams must be in [0, 4096]");
+    sensor.validate();
+}
+
+Simulator::Simulator(World world, SimulatorConfig config)
+    : world_(std::move(world)), config_(std::move(config)), static_scene_((config_.validate(), world_.static_mesh)) {}
+
+double Simulator::fraction(std::size_t index) const {
+    return config_.frames == 1 ? 0.5 : static_cast<double>(index) / static_cast<double>(config_.frames - 1);
+}
+
+SensorModel Simulator::ground_truth_sensor() const { return SensorModel::ground_truth_for(config_.sensor, std::max(1, config_.gt_beams)); }
+
+SimulatedFrame Simulator::frame(std::size_t index) const {
+    if (index >= frame_count()) throw InvalidArgument("frame index out of range");
+    SimulatedFrame f;
+    f.index = index;
+    const double s = fraction(index);
+    f.time = world_.time_at(s);
+    f.pose = world_.pose_at(s, config_.sensor.mount_height);
+    f.movers = world_.movers_at(f.time);
+    std::optional<MeshScene> movers;
+    if (!f.movers.empty()) movers.emplace(f.movers);
+    const UnionScene scene(static_scene_, movers ? &*movers : nullptr);
+    f.scan = simulate_scan(scene, config_.sensor, f.pose, frame_seed(config_.seed, index));
+    if (config_.gt_beams > 0) f.ground_truth = simulate_scan(scene, ground_truth_sensor(), f.pose, 0);
+    return f;
+}
+
+}  // namespace lidarsurf::sim
