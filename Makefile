@@ -5,6 +5,8 @@ ASAN_BUILD ?= build-asan
 JOBS ?= $(shell nproc)
 PREFIX ?= /usr/local
 CMAKE_FLAGS ?=
+# The demo picture: behind and above the sensor, looking ahead along the street.
+DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
 .PHONY: setup configure build demo test sanitize install package-check python clean
 
@@ -19,10 +21,11 @@ build: configure
 
 demo: build
 	@mkdir -p $(BUILD)/demo
-	$(BUILD)/bin/lidarsurf simulate --scene demo -o $(BUILD)/demo/scan.bin --gt $(BUILD)/demo/gt.bin
+	$(BUILD)/bin/lidarsurf simulate --scene town --frames 1 -o $(BUILD)/demo/scan.bin --gt $(BUILD)/demo/gt.bin
 	$(BUILD)/bin/lidarsurf reconstruct $(BUILD)/demo/scan.bin -o $(BUILD)/demo/mesh.ply
 	$(BUILD)/bin/lidarsurf evaluate $(BUILD)/demo/mesh.ply $(BUILD)/demo/gt.bin --json $(BUILD)/demo/metrics.json
-	@echo "demo mesh: $(BUILD)/demo/mesh.ply (open it in MeshLab or CloudCompare; colour by 'level' for k')"
+	$(BUILD)/bin/lidarsurf render $(BUILD)/demo/mesh.ply -o $(BUILD)/demo/mesh.png $(DEMO_CAMERA)
+	@echo "demo: $(BUILD)/demo/mesh.ply (colour by 'level' for k' in MeshLab/CloudCompare), picture $(BUILD)/demo/mesh.png"
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)

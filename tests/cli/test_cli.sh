@@ -15,7 +15,7 @@ expect() {  # expect CODE PATTERN -- command...
         passed=$((passed + 1))
     fi
 }
-"$cli" simulate -o "$dir/scan.bin" --gt "$dir/gt.bin" >/dev/null || { echo "simulate failed"; exit 1; }
+"$cli" simulate --scene demo -o "$dir/scan.bin" --gt "$dir/gt.bin" >/dev/null || { echo "simulate failed"; exit 1; }
 expect 0 "triangles" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply"
 [ -s "$dir/mesh.ply" ] || { echo "FAIL: no mesh written"; fail=$((fail + 1)); }
 expect 0 "mode cn" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.obj" --mode cn --k 3
@@ -54,6 +54,36 @@ expect 2 "threshold" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --threshol
 expect 3 "not a PLY" -- "$cli" evaluate "$dir/gt.bin" "$dir/gt.bin"
 expect 4 "cannot open" -- "$cli" evaluate "$dir/mesh.ply" "$dir/nothere.bin"
 expect 2 "refusing" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --json "$dir/gt.bin"
+# Simulator, renderer and benchmark.
+seq="$dir/seq"
+expect 0 "simulated 2 frames" -- "$cli" simulate --scene town --sensor vlp16 --frames 2 --length 100 --gt-beams 48 -o "$seq"
+for f in velodyne/000000.bin velodyne/000001.bin gt/000000.bin gt/000001.bin objects/000001.ply scene.ply sensor.json; do
+    [ -s "$seq/$f" ] || { echo "FAIL: simulate did not write $f"; fail=$((fail + 1)); }
+done
+[ "$(wc -l < "$seq/poses.txt")" -eq 2 ] || { echo "FAIL: poses.txt should have 2 lines"; fail=$((fail + 1)); }
+[ "$(wc -w < "$seq/poses.txt")" -eq 24 ] || { echo "FAIL: poses.txt should hold 2 x 12 numbers"; fail=$((fail + 1)); }
+expect 0 "Average Error.*AN\+GC kmax=5|AN\+GC kmax=5" -- "$cli" benchmark "$seq" --no-plots
+[ "$(wc -l < "$seq/benchmark/results.csv")" -eq 12 ] || { echo "FAIL: results.csv should have a header and 11 rows"; fail=$((fail + 1)); }
+grep -q '"by_range"' "$seq/benchmark/results.json" || { echo "FAIL: results.json lacks the range bins"; fail=$((fail + 1)); }
+if /usr/bin/python3 -c 'import matplotlib' 2>/dev/null; then
+    expect 0 "IMLS" -- "$cli" benchmark "$seq" --frames 1 --methods 'AN+GC kmax=5,IMLS' --out "$dir/bench1"
+    [ -s "$dir/bench1/fig6a_range.png" ] && [ -s "$dir/bench1/fig6b_delta.png" ] || { echo "FAIL: figures not drawn"; fail=$((fail + 1)); }
+fi
+expect 0 "rendered" -- "$cli" render "$dir/mesh.ply" -o "$dir/mesh.png" --colour level --width 160 --height 120
+head -c 4 "$dir/mesh.png" | grep -q "PNG" || { echo "FAIL: render wrote no PNG"; fail=$((fail + 1)); }
+expect 0 "simulated .* points" -- "$cli" simulate --scene offroad --sensor vlp16 --length 100 -o "$dir/off.bin" --gt "$dir/off_gt.bin" --gt-beams 32
+printf '{"beams": 8, "elevation_max_deg": 5, "elevation_min_deg": -20, "azimuth_step_deg": 1}' > "$dir/s.json"
+expect 0 "simulated 1 frames" -- "$cli" simulate --scene town --sensor "$dir/s.json" --frames 1 --length 100 -o "$dir/seq_json"
+expect 2 "unknown scene" -- "$cli" simulate --scene city -o "$dir/x"
+expect 2 "unknown sensor" -- "$cli" simulate --sensor hdl65 -o "$dir/x"
+printf '{"beams": 8' > "$dir/bad.json"
+expect 3 "sensor JSON" -- "$cli" simulate --sensor "$dir/bad.json" -o "$dir/x"
+expect 2 "frames" -- "$cli" simulate --frames 0 -o "$dir/x"
+expect 2 "needs --from" -- "$cli" simulate --scene "$seq/scene.ply" -o "$dir/x"
+expect 4 "not a sequence" -- "$cli" benchmark "$dir/nothere"
+expect 2 "unknown benchmark method" -- "$cli" benchmark "$seq" --methods 'AN+GC kmax=7'
+expect 2 "PNG" -- "$cli" render "$dir/mesh.ply" -o "$dir/x.jpg"
+expect 3 "not a PLY|no triangle" -- "$cli" render "$dir/gt.bin" -o "$dir/x.png"
 # A failed run leaves a previous output intact and writes nothing else.
 cp "$dir/mesh.ply" "$dir/keep.ply"
 expect 2 "tau" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply" --tau -3

@@ -1,0 +1,113 @@
+// The procedural worlds and the simulator, checked against the scene they scan: every noise-free
+// return lies on the scene's triangles, every noisy one within a few sigma.
+#include <gtest/gtest.h>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/mesh/mesh_distance.hpp"
+#include "lidarsurf/sim/mesh_scene.hpp"
+#include "lidarsurf/sim/procedural_scene.hpp"
+#include "lidarsurf/sim/simulator.hpp"
+
+using namespace lidarsurf;
+using namespace lidarsurf::sim;
+
+namespace {
+
+SceneConfig small(SceneKind kind, std::uint64_t seed = 1) {
+    SceneConfig c;
+    c.kind = kind;
+    c.seed = seed;
+    c.length = 120;
+    return c;
+}
+
+TEST(ProceduralScene, SameSeedSameTrianglesOtherSeedOtherTown) {
+    for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
+        const World a = make_world(small(kind, 4)), b = make_world(small(kind, 4)), c = make_world(small(kind, 5));
+        ASSERT_EQ(a.static_mesh.vertices.size(), b.static_mesh.vertices.size());
+        EXPECT_EQ(a.static_mesh.vertices, b.static_mesh.vertices);
+        EXPECT_EQ(a.static_mesh.triangles, b.static_mesh.triangles);
+        EXPECT_NE(a.static_mesh.vertices, c.static_mesh.vertices);
+        EXPECT_NO_THROW(a.static_mesh.check());
+    }
+    EXPECT_THROW(parse_scene_kind("city"), InvalidArgument);
+    SceneConfig bad;
+    bad.length = 10;
+    EXPECT_THROW(make_world(bad), InvalidArgument);
+}
+
+// The rig rides at its mount height above the ground with nothing within a metre of the sensor.
+TEST(ProceduralScene, TheDriveIsClear) {
+    for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
+        const World w = make_world(small(kind));
+        for (double s : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+            const double t = w.time_at(s);
+            const MeshScene scene(w.scene_at(t));
+            const Eigen::Isometry3d pose = w.pose_at(s, 1.73);
+            const auto down = scene.intersect(pose.translation(), -Eigen::Vector3d::UnitZ(), 10);
+            ASSERT_TRUE(down) << to_string(kind) << " s=" << s;
+            EXPECT_NEAR(*down, 1.73, kind == SceneKind::Town ? 1e-4 : 0.05) << to_string(kind) << " s=" << s;
+            for (int a = 0; a < 16; ++a) {
+                const Eigen::Vector3d d(std::cos(a * M_PI / 8), std::sin(a * M_PI / 8), 0);
+                const auto h = scene.intersect(pose.translation(), pose.linear() * d, 1.0);
+                EXPECT_FALSE(h) << to_string(kind) << " s=" << s << " azimuth " << a;
+            }
+        }
+    }
+}
+
+TEST(ProceduralScene, MoversDriveAlongTheStreetAndWrap) {
+    const World w = make_world(small(SceneKind::Town));
+    ASSERT_EQ(w.movers.size(), 3u);
+    for (const Mover& m : w.movers) {
+        for (double t : {0.0, 1.0, 10.0, 100.0}) {
+            const Eigen::Vector3d p = m.position_at(t);
+            EXPECT_GE(p.x(), m.x_min);
+            EXPECT_LE(p.x(), m.x_max);
+            EXPECT_EQ(p.y(), m.start.y());
+        }
+        EXPECT_NEAR(m.position_at(0.5).x() - m.position_at(0.0).x(), 0.5 * m.speed, 1e-9);  // away from the wrap
+    }
+}
+
+TEST(Simulator, ReturnsLieOnTheSceneSurface) {
+    for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
+        SimulatorConfig cfg;
+        cfg.frames = 3;
+        cfg.sensor = SensorModel::vlp16();
+        cfg.gt_beams = 32;
+        const Simulator sim(make_world(small(kind)), cfg);
+        for (std::size_t i = 0; i < sim.frame_count(); ++i) {
+            const SimulatedFrame f = sim.frame(i);
+            EXPECT_NEAR((f.pose.translation() - sim.world().pose_at(sim.fraction(i), 1.73).translation()).norm(), 0.0, 1e-12);
+            const MeshDistance surface(sim.world().scene_at(f.time));
+            ASSERT_GT(f.scan.points.size(), 5000u);
+            ASSERT_GT(f.ground_truth.points.size(), f.scan.points.size());
+            std::size_t far = 0;
+            for (const auto& p : f.scan.points)
+                if (surface.distance(f.pose * p) > 5 * cfg.sensor.range_noise) ++far;
+            EXPECT_LT(far, f.scan.points.size() / 1000 + 1) << to_string(kind) << " frame " << i;  // 5-sigma tail
+            double worst = 0;
+            for (const auto& p : f.ground_truth.points) worst = std::max(worst, surface.distance(f.pose * p));
+            EXPECT_LT(worst, 2e-3) << to_string(kind) << " frame " << i;  // float ray casting at <= 100 m
+        }
+    }
+}
+
+TEST(Simulator, FramesAreEquiSampledAlongTheDrive) {
+    SimulatorConfig cfg;
+    cfg.frames = 5;
+    cfg.gt_beams = 0;
+    cfg.sensor = SensorModel::vlp16();
+    const Simulator sim(make_world(small(SceneKind::Town)), cfg);
+    EXPECT_DOUBLE_EQ(sim.fraction(0), 0.0);
+    EXPECT_DOUBLE_EQ(sim.fraction(4), 1.0);
+    EXPECT_DOUBLE_EQ(sim.fraction(2), 0.5);
+    EXPECT_TRUE(sim.frame(1).ground_truth.points.empty());
+    EXPECT_THROW(sim.frame(5), InvalidArgument);
+    SimulatorConfig bad = cfg;
+    bad.frames = 0;
+    EXPECT_THROW(Simulator(make_world(small(SceneKind::Town)), bad), InvalidArgument);
+}
+
+}  // namespace
