@@ -66,8 +66,7 @@ struct EvaluateOptions {
 
 // Ground truth as points: a point file, or a mesh (.obj, or .ply with faces) sampled densely.
 std::vector<Eigen::Vector3d> read_ground_truth(const std::string& path, const EvaluateOptions& o) {
-    std::string ext = fs::path(path).extension().string();
-    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    const std::string ext = extension_of(path);
     if (o.gt_format == "auto" && (ext == ".obj" || ext == ".ply")) {
         Mesh gt = read_mesh(path);
         if (!gt.triangles.empty()) return sample_surface(gt, o.gt_spacing, 20'000'000, o.seed);

@@ -19,6 +19,18 @@ void frame_of(const Eigen::Vector3d& axis, Eigen::Vector3d& u, Eigen::Vector3d& 
     v = axis.cross(u);
 }
 
+/// The `segments` points of a circle of `radius` around `axis` (not unit), as offsets.
+std::vector<Eigen::Vector3d> circle(const Eigen::Vector3d& axis, double radius, int segments) {
+    Eigen::Vector3d u, v;
+    frame_of(axis.normalized(), u, v);
+    std::vector<Eigen::Vector3d> offsets;
+    for (int i = 0; i < segments; ++i) {
+        const double t = kTwoPi * i / segments;
+        offsets.push_back(radius * (std::cos(t) * u + std::sin(t) * v));
+    }
+    return offsets;
+}
+
 }  // namespace
 
 std::uint32_t MeshBuilder::vertex(const Eigen::Vector3d& p) {
@@ -55,13 +67,9 @@ void MeshBuilder::box_between(const Eigen::Vector3d& lo, const Eigen::Vector3d& 
 void MeshBuilder::cylinder(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius, int segments) {
     const Eigen::Vector3d axis = b - a;
     if (!(radius > 0) || axis.norm() <= 0 || segments < 3) throw InvalidArgument("degenerate cylinder");
-    Eigen::Vector3d u, v;
-    frame_of(axis.normalized(), u, v);
     const std::uint32_t ca = vertex(a), cb = vertex(b);
     std::vector<std::uint32_t> ra, rb;
-    for (int i = 0; i < segments; ++i) {
-        const double t = kTwoPi * i / segments;
-        const Eigen::Vector3d off = radius * (std::cos(t) * u + std::sin(t) * v);
+    for (const Eigen::Vector3d& off : circle(axis, radius, segments)) {
         ra.push_back(vertex(a + off));
         rb.push_back(vertex(b + off));
     }
@@ -76,14 +84,9 @@ void MeshBuilder::cylinder(const Eigen::Vector3d& a, const Eigen::Vector3d& b, d
 void MeshBuilder::cone(const Eigen::Vector3d& base, const Eigen::Vector3d& apex, double radius, int segments) {
     const Eigen::Vector3d axis = apex - base;
     if (!(radius > 0) || axis.norm() <= 0 || segments < 3) throw InvalidArgument("degenerate cone");
-    Eigen::Vector3d u, v;
-    frame_of(axis.normalized(), u, v);
     const std::uint32_t cb = vertex(base), tip = vertex(apex);
     std::vector<std::uint32_t> ring;
-    for (int i = 0; i < segments; ++i) {
-        const double t = kTwoPi * i / segments;
-        ring.push_back(vertex(base + radius * (std::cos(t) * u + std::sin(t) * v)));
-    }
+    for (const Eigen::Vector3d& off : circle(axis, radius, segments)) ring.push_back(vertex(base + off));
     for (int i = 0; i < segments; ++i) {
         const int j = (i + 1) % segments;
         triangle(ring[i], ring[j], tip);

@@ -5,6 +5,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/sim/mesh_builder.hpp"
+#include "splitmix.hpp"
 
 namespace lidarsurf::sim {
 namespace {
@@ -14,12 +15,11 @@ class Rng {
 public:
     explicit Rng(std::uint64_t seed) : state_(seed * 0x2545F4914F6CDD1Dull + 0x1234567ull) {}
     std::uint64_t next() {
-        std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
+        const std::uint64_t z = detail::splitmix64(state_);
+        state_ += 0x9E3779B97F4A7C15ull;
+        return z;
     }
-    double uniform(double lo, double hi) { return lo + (hi - lo) * (static_cast<double>(next() >> 11) * 0x1.0p-53); }
+    double uniform(double lo, double hi) { return lo + (hi - lo) * detail::unit_interval(next()); }
     bool chance(double p) { return uniform(0, 1) < p; }
 
 private:

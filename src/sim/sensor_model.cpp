@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lidarsurf/core/errors.hpp"
+#include "splitmix.hpp"
 
 namespace lidarsurf::sim {
 namespace {
@@ -17,14 +18,9 @@ std::vector<double> even_beams(int beams, double top_deg, double bottom_deg) {
     return e;
 }
 
-/// splitmix64: a counter-based generator, so ray i gets the same draws on any thread.
-std::uint64_t mix(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return x ^ (x >> 31);
-}
-double unit(std::uint64_t x) { return static_cast<double>(x >> 11) * 0x1.0p-53; }  // [0, 1)
+// Counter-based draws, so ray i gets the same noise on any thread.
+using detail::splitmix64;
+using detail::unit_interval;
 
 }  // namespace
 
@@ -177,7 +173,7 @@ PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const
     const Eigen::Vector3d origin = pose.translation();
     std::vector<Eigen::Vector3d> hits(steps * beams);
     std::vector<std::uint8_t> valid(steps * beams, 0);
-    const std::uint64_t key = mix(seed);
+    const std::uint64_t key = splitmix64(seed);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, steps, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t a = r.begin(); a != r.end(); ++a) {
             const double az = static_cast<double>(a) * sensor.azimuth_step_deg * deg;
@@ -187,11 +183,11 @@ PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const
                 const Eigen::Vector3d local(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
                 const auto range = scene.intersect(origin, rot * local, sensor.max_range);
                 if (!range || *range < sensor.min_range) continue;
-                const std::uint64_t r0 = mix(key ^ (2 * ray)), r1 = mix(key ^ (2 * ray + 1));
-                if (sensor.dropout > 0 && unit(mix(r0 ^ r1)) < sensor.dropout) continue;
+                const std::uint64_t r0 = splitmix64(key ^ (2 * ray)), r1 = splitmix64(key ^ (2 * ray + 1));
+                if (sensor.dropout > 0 && unit_interval(splitmix64(r0 ^ r1)) < sensor.dropout) continue;
                 double noisy = *range;
                 if (sensor.range_noise > 0) {  // Box-Muller
-                    const double u1 = 1.0 - unit(r0), u2 = unit(r1);
+                    const double u1 = 1.0 - unit_interval(r0), u2 = unit_interval(r1);
                     noisy += sensor.range_noise * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
                 }
                 hits[ray] = noisy * local;
