@@ -41,13 +41,18 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     }
     const Eigen::Vector3d local = world - origin_;
     const VoxelKey key = key_of_local(local);
-    auto& block = blocks_[block_of(key)];
-    if (!block) {
-        block = std::make_unique<Block>();
-        block->fill(-1);
+    const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
+    if (!last_block_ || block_key != last_block_key_) {
+        const std::uint32_t b = index_.block_index(block_key);
+        if (b >= occupancy_.size()) occupancy_.resize(b + 1, Occupancy{});
+        last_block_ = &index_.block_at(b);
+        last_occupancy_ = &occupancy_[b];
+        last_block_key_ = block_key;
     }
-    std::int32_t& slot = (*block)[local_index(key)];
+    const int offset = BlockMap<std::int32_t>::offset_of(key);
+    std::int32_t& slot = (*last_block_)[static_cast<std::size_t>(offset)];
     if (slot < 0) {
+        (*last_occupancy_)[static_cast<std::size_t>(offset >> 6)] |= std::uint64_t{1} << (offset & 63);
         slot = static_cast<std::int32_t>(stats_.size());
         stats_.emplace_back();
         keys_.push_back(key);
@@ -56,16 +61,9 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     ++points_;
 }
 
-const VoxelGrid::Block* VoxelGrid::find_block(const VoxelKey& block_key) const {
-    auto it = blocks_.find(block_key);
-    return it == blocks_.end() ? nullptr : it->second.get();
-}
-
 const VoxelStats* VoxelGrid::find(const VoxelKey& key) const {
-    const Block* block = find_block(block_of(key));
-    if (!block) return nullptr;
-    const std::int32_t idx = (*block)[local_index(key)];
-    return idx < 0 ? nullptr : &stats_[static_cast<std::size_t>(idx)];
+    const std::int32_t* slot = index_.find(key);
+    return slot && *slot >= 0 ? &stats_[static_cast<std::size_t>(*slot)] : nullptr;
 }
 
 }  // namespace lidarsurf

@@ -1,9 +1,10 @@
 #include "lidarsurf/mesh/marching_cubes.hpp"
 
 #include <array>
-#include <unordered_map>
 
 #include <Eigen/Geometry>
+
+#include "lidarsurf/core/block_map.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -47,29 +48,25 @@ const std::array<std::uint8_t, 12>& edge_faces() {
 }
 
 // Lattice-global identity of a mesh vertex: the edge (min endpoint, axis 0..2) it lies on, or the
-// lattice vertex itself (axis 3) when the field is exactly zero there.
+// lattice vertex itself (axis 3) when the field is exactly zero there. The welding table holds, per
+// lattice vertex, the mesh index of each of its 4 identities (kNone when not created yet).
 struct VertexId {
     VoxelKey base;
     int axis;
-    bool operator==(const VertexId& o) const { return axis == o.axis && base == o.base; }
 };
-struct VertexIdHash {
-    std::size_t operator()(const VertexId& id) const noexcept {
-        return static_cast<std::size_t>(mix64(pack_key(id.base) ^ (static_cast<std::uint64_t>(id.axis) << 63) ^
-                                              (static_cast<std::uint64_t>(id.axis) * 0x9e3779b97f4a7c15ULL)));
-    }
-};
+constexpr std::uint32_t kNone = 0xffffffffu;
+using WeldSlots = std::array<std::uint32_t, 4>;
 
 class MeshBuilder {
 public:
-    explicit MeshBuilder(const TsdfField& field) : field_(field) {}
+    explicit MeshBuilder(const TsdfField& field) : field_(field), lookup_(field) {}
 
     void process_cube(const VoxelKey& base) {
         std::array<const VertexSample*, 8> s{};
         std::array<bool, 8> neg{};
         int negatives = 0;
         for (int c = 0; c < 8; ++c) {
-            s[c] = field_.find(base + corner_offset(c));
+            s[c] = lookup_.find(base + corner_offset(c));
             if (!s[c]) return;  // only cubes whose 8 corners are defined
             neg[c] = s[c]->tsdf < 0;  // zero counts as positive (outside)
             negatives += neg[c];
@@ -165,10 +162,11 @@ private:
         VertexId id{a, axis};
         if (t <= 0) id = {a, 3};
         else if (t >= 1) id = {b, 3};
-        auto [it, added] = ids_.try_emplace(id, static_cast<std::uint32_t>(mesh_.vertices.size()));
-        if (!added) return it->second;
+        std::uint32_t& slot = ids_[id.base][static_cast<std::size_t>(id.axis)];
+        if (slot != kNone) return slot;
+        slot = static_cast<std::uint32_t>(mesh_.vertices.size());
 
-        const double tc = id.axis == 3 ? (id.base == a ? 0.0 : 1.0) : t;
+        const double tc = id.axis == 3 ? (t <= 0 ? 0.0 : 1.0) : t;
         const Eigen::Vector3d pa = a.cast<double>() * field_.voxel_size, pb = b.cast<double>() * field_.voxel_size;
         mesh_.vertices.push_back(field_.origin + pa + tc * (pb - pa));
         Eigen::Vector3f n = (1.0f - static_cast<float>(tc)) * sa.normal + static_cast<float>(tc) * sb.normal;
@@ -177,7 +175,7 @@ private:
         const VertexSample& nearest = tc < 0.5 ? sa : sb;
         mesh_.levels.push_back(nearest.level);
         mesh_.confidence.push_back(nearest.confidence);
-        return it->second;
+        return slot;
     }
 
     void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
@@ -190,7 +188,8 @@ private:
 
     const TsdfField& field_;
     Mesh mesh_;
-    std::unordered_map<VertexId, std::uint32_t, VertexIdHash> ids_;
+    TsdfField::Accessor lookup_;
+    BlockMap<WeldSlots> ids_{WeldSlots{kNone, kNone, kNone, kNone}};
 };
 
 }  // namespace

@@ -5,9 +5,13 @@
 namespace lidarsurf {
 
 std::optional<LocalPlane> fit_plane(const VoxelStats& stats, int n_min, const Eigen::Vector3d& sensor,
-                                    double min_lambda2, double min_planarity) {
+                                    double min_lambda2, double min_planarity, EigenSolver method) {
     if (stats.count < static_cast<std::uint64_t>(n_min)) return std::nullopt;  // Eq. (1)
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(stats.covariance());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    if (method == EigenSolver::ClosedForm)
+        solver.computeDirect(stats.covariance());
+    else
+        solver.compute(stats.covariance());
     if (solver.info() != Eigen::Success) return std::nullopt;
     // Eigen sorts eigenvalues ascending: lambda3 <= lambda2 <= lambda1.
     const Eigen::Vector3d ev = solver.eigenvalues();

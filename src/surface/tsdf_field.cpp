@@ -8,18 +8,14 @@
 
 namespace lidarsurf {
 
-const VertexSample* TsdfField::find(const VoxelKey& v) const {
-    auto it = index_.find(v);
-    return it == index_.end() ? nullptr : &samples_[it->second];
-}
-
 void TsdfField::insert(const VoxelKey& v, const VertexSample& s) {
-    auto [it, added] = index_.try_emplace(v, static_cast<std::uint32_t>(samples_.size()));
-    if (added) {
+    std::int32_t& slot = index_[v];
+    if (slot < 0) {
+        slot = static_cast<std::int32_t>(samples_.size());
         keys_.push_back(v);
         samples_.push_back(s);
     } else {
-        samples_[it->second] = s;
+        samples_[static_cast<std::size_t>(slot)] = s;
     }
 }
 

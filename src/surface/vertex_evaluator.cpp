@@ -20,33 +20,60 @@ VertexSample make_sample(const LocalPlane& plane, const Eigen::Vector3d& v, int 
     return s;
 }
 
-}  // namespace
-
-VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
-                             const Eigen::Vector3d& sensor_local) {
-    const Eigen::Vector3d position = v.cast<double>() * grid.voxel_size();
-    const double min_lambda2 = degenerate_lambda2(grid.voxel_size());
-
-    // Tests one level; returns a defined sample when the mode's conditions hold at that level.
-    auto try_level = [&](const VoxelStats& stats, int level) -> VertexSample {
-        const auto plane = fit_plane(stats, config.n_min, sensor_local, min_lambda2, config.min_planarity);  // Eq. (1), (2)
-        if (!plane) return {};
-        const double confidence = gaussian_confidence(*plane, position);  // Eq. (3)
-        if (config.gaussian() && confidence < config.tau) return {};
-        return make_sample(*plane, position, level, confidence);
-    };
-
-    if (!config.adaptive()) {  // CN, CN+GC: only H^k.
-        return try_level(merge_neighbourhood(grid, v, config.k), config.k);
-    }
-    // AN, AN+GC: the smallest k in [1, k_max] that satisfies the conditions (Sec. III-C1).
-    VoxelStats acc;
+// The level loop of the modes (Sec. III-C1, Sec. IV-B). `stats_of(level)` gives the merged
+// statistics of H^level(v); the adaptive modes call it with level = 1, 2, ... in order, so it may
+// grow one accumulator shell by shell.
+template <typename StatsOf>
+VertexSample choose_level(StatsOf&& stats_of, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+                          const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
+    if (!config.adaptive())  // CN, CN+GC: only H^k.
+        return evaluate_level(stats_of(config.k), config.k, position, config, sensor_local, min_lambda2, solver);
+    // AN, AN+GC: the smallest k in [1, k_max] that satisfies the conditions.
     for (int level = 1; level <= config.k_max; ++level) {
-        grow_neighbourhood(grid, v, level, acc);
-        VertexSample s = try_level(acc, level);
+        VertexSample s = evaluate_level(stats_of(level), level, position, config, sensor_local, min_lambda2, solver);
         if (s.defined) return s;
     }
     return {};
+}
+
+}  // namespace
+
+VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vector3d& position,
+                            const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
+                            EigenSolver solver) {
+    const auto plane = fit_plane(stats, config.n_min, sensor_local, min_lambda2, config.min_planarity, solver);  // Eq. (1), (2)
+    if (!plane) return {};
+    const double confidence = gaussian_confidence(*plane, position);  // Eq. (3)
+    if (config.gaussian() && confidence < config.tau) return {};
+    return make_sample(*plane, position, level, confidence);
+}
+
+VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor_local) {
+    VoxelStats acc;
+    auto stats_of = [&](int level) -> const VoxelStats& {
+        if (config.adaptive())
+            grow_neighbourhood(grid, v, level, acc);
+        else
+            acc = merge_neighbourhood(grid, v, level);
+        return acc;
+    };
+    return choose_level(stats_of, v.cast<double>() * grid.voxel_size(), config, sensor_local,
+                        degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
+}
+
+VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor_local, EigenSolver solver) {
+    const Eigen::Vector3d position = v.cast<double>() * window.voxel_size();
+    Moments acc;
+    auto stats_of = [&](int level) {
+        if (config.adaptive())
+            window.grow(v, level, acc);
+        else
+            acc = window.box(v, level);
+        return acc.to_stats(position);
+    };
+    return choose_level(stats_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver);
 }
 
 }  // namespace lidarsurf

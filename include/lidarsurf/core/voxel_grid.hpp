@@ -1,19 +1,18 @@
 #pragma once
 // Sparse voxel grid of size alpha holding VoxelStats (Sec. III-A).
 //
-// Storage is blocked: a hash map of 8x8x8 dense blocks of indices into a flat array of
+// Storage is blocked: a BlockMap of 8x8x8 dense blocks of indices into a flat array of
 // statistics, so that box queries over H^k(v) read contiguous memory. Statistics are kept in a
 // local frame (world minus `origin`, a multiple of alpha chosen from the first point) so that
 // coordinates far from the world origin (UTM maps, 1e6 m) keep full precision.
 #include <array>
 #include <cstdint>
-#include <memory>
 #include <optional>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/voxel_key.hpp"
 #include "lidarsurf/core/voxel_stats.hpp"
 
@@ -21,10 +20,6 @@ namespace lidarsurf {
 
 class VoxelGrid {
 public:
-    static constexpr int kBlockBits = 3;
-    static constexpr int kBlockSize = 1 << kBlockBits;  // 8 voxels per block side
-    static constexpr int kBlockVolume = kBlockSize * kBlockSize * kBlockSize;
-
     /// Creates an empty grid of voxel size `alpha` (metres, must be finite and > 0). The local
     /// origin is `origin` rounded to the lattice if given, else the lattice point nearest the first
     /// inserted point.
@@ -62,34 +57,39 @@ public:
     Eigen::Vector3d to_local(const Eigen::Vector3d& world) const { return world - origin_; }
     Eigen::Vector3d to_world(const Eigen::Vector3d& local) const { return local + origin_; }
 
+    /// Voxel index blocks: slot = index into stats()/keys(), -1 = empty voxel.
+    const BlockMap<std::int32_t>& index() const { return index_; }
+
+    /// Occupancy bits of an index block, one 64-bit word per z layer of the block: bit x + 8 y of
+    /// word z is set when voxel (x, y, z) of the block is occupied. Lets box sums skip empty space
+    /// 64 voxels at a time. `block` is a creation index of index().
+    using Occupancy = std::array<std::uint64_t, 8>;
+    const Occupancy& occupancy(std::size_t block) const { return occupancy_[block]; }
+
 private:
-    using Block = std::array<std::int32_t, kBlockVolume>;  // -1 = empty voxel
-
-    static int local_index(const VoxelKey& key) {
-        const int m = kBlockSize - 1;
-        return (key.x() & m) | ((key.y() & m) << kBlockBits) | ((key.z() & m) << (2 * kBlockBits));
-    }
-    static VoxelKey block_of(const VoxelKey& key) {
-        return {key.x() >> kBlockBits, key.y() >> kBlockBits, key.z() >> kBlockBits};
-    }
-    const Block* find_block(const VoxelKey& block_key) const;
-
     double alpha_;
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
     bool origin_set_ = false;
     std::uint64_t points_ = 0;
-    std::unordered_map<VoxelKey, std::unique_ptr<Block>, VoxelKeyHash> blocks_;
+    BlockMap<std::int32_t> index_{-1};
+    // The block of the previous insert: consecutive lidar returns mostly share a block.
+    BlockMap<std::int32_t>::Block* last_block_ = nullptr;
+    Occupancy* last_occupancy_ = nullptr;
+    VoxelKey last_block_key_ = VoxelKey::Zero();
+    std::vector<Occupancy> occupancy_;  // per index block, in creation order
     std::vector<VoxelKey> keys_;
     std::vector<VoxelStats> stats_;
 };
 
 template <typename F>
 void VoxelGrid::for_each_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const {
-    const VoxelKey blo = block_of(lo), bhi = block_of(hi);
+    using Map = BlockMap<std::int32_t>;
+    constexpr int kBlockSize = Map::kSize;
+    const VoxelKey blo = Map::block_of(lo), bhi = Map::block_of(hi);
     for (int bz = blo.z(); bz <= bhi.z(); ++bz)
         for (int by = blo.y(); by <= bhi.y(); ++by)
             for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
-                const Block* block = find_block({bx, by, bz});
+                const Map::Block* block = index_.find_block({bx, by, bz});
                 if (!block) continue;
                 const int x0 = std::max(lo.x(), bx * kBlockSize), x1 = std::min(hi.x(), bx * kBlockSize + kBlockSize - 1);
                 const int y0 = std::max(lo.y(), by * kBlockSize), y1 = std::min(hi.y(), by * kBlockSize + kBlockSize - 1);
@@ -98,7 +98,7 @@ void VoxelGrid::for_each_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) c
                     for (int y = y0; y <= y1; ++y)
                         for (int x = x0; x <= x1; ++x) {
                             const VoxelKey key{x, y, z};
-                            const std::int32_t idx = (*block)[local_index(key)];
+                            const std::int32_t idx = (*block)[static_cast<std::size_t>(Map::offset_of(key))];
                             if (idx >= 0) f(key, stats_[static_cast<std::size_t>(idx)]);
                         }
             }

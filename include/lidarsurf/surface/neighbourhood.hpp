@@ -2,9 +2,20 @@
 // Neighbourhoods of a grid vertex (Sec. III-B1). Vertex v (integer lattice point, world position
 // origin + alpha*v) is the shared corner of voxels v-1 and v along each axis, so
 // H^k(v) = the (2k)^3 voxels with indices in [v-k, v+k-1]^3; H^1 are its 8 adjacent voxels.
+#include <array>
+
 #include "lidarsurf/core/voxel_grid.hpp"
 
 namespace lidarsurf {
+
+/// A box of voxels, lo <= key <= hi (inclusive).
+struct VoxelBox {
+    VoxelKey lo, hi;
+};
+
+/// The shell H^k(v) \ H^{k-1}(v) (k >= 2) as 6 disjoint boxes: the two z-slabs, the two y-slabs of
+/// the inner z range, the two x-slabs of the inner y and z range.
+std::array<VoxelBox, 6> shell_boxes(const VoxelKey& vertex, int k);
 
 /// Merged statistics |H|, H_mu, H_sigma of H^k(v) (k >= 1).
 VoxelStats merge_neighbourhood(const VoxelGrid& grid, const VoxelKey& vertex, int k);

@@ -6,7 +6,8 @@
 // Two implementations of the same definition:
 //  - reference: evaluate every candidate vertex (compute_tsdf), then search the cubes;
 //  - fast: search the cubes from the occupied voxels, evaluating a vertex only when a cube
-//    being visited needs it (each with the same evaluate_vertex, so the values are identical).
+//    being visited needs it, with the windowed evaluate_vertex (same conditions, same values up
+//    to rounding).
 #include <vector>
 
 #include "lidarsurf/core/voxel_grid.hpp"
@@ -25,13 +26,15 @@ namespace lidarsurf {
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation);
 
 struct SeededTsdf {
-    TsdfField field;                ///< the defined vertices that were evaluated
+    TsdfField field;                ///< the defined vertices that were evaluated (a superset of the cubes' corners)
     std::vector<VoxelKey> cubes;    ///< as seeded_cubes(field, grid) on the full field
     std::size_t evaluated = 0;      ///< vertices evaluated
 };
 
-/// The fast path: same cubes and the same values at their corners as compute_tsdf followed by
-/// seeded_cubes, evaluating only the vertices the search touches (in parallel per search wave).
-SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world);
+/// The fast path: the same cubes and the same values at their corners (up to rounding) as
+/// compute_tsdf followed by seeded_cubes, evaluating only the vertices the search touches, in
+/// parallel per search wave and per 8^3 vertex block through a NeighbourhoodWindow.
+SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
+                               EigenSolver solver = EigenSolver::ClosedForm);
 
 }  // namespace lidarsurf

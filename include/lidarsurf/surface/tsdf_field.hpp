@@ -3,9 +3,9 @@
 // largest neighbourhood H^{k_max}(v) contains at least one occupied voxel; every other vertex stays
 // undefined (see docs/method.md for the reason).
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
+#include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
@@ -14,8 +14,32 @@ namespace lidarsurf {
 
 class TsdfField {
 public:
+    TsdfField() = default;
+    /// Adopts a field built elsewhere: `index` maps each vertex to its position in `keys` and
+    /// `samples` (negative = undefined); every sample must be defined.
+    TsdfField(BlockMap<std::int32_t>&& index, std::vector<VoxelKey>&& keys, std::vector<VertexSample>&& samples,
+              double voxel_size_, const Eigen::Vector3d& origin_)
+        : voxel_size(voxel_size_), origin(origin_), index_(std::move(index)), keys_(std::move(keys)), samples_(std::move(samples)) {}
+
     /// Sample at lattice vertex v, or nullptr if v is undefined.
-    const VertexSample* find(const VoxelKey& v) const;
+    const VertexSample* find(const VoxelKey& v) const {
+        const std::int32_t* slot = index_.find(v);
+        return slot && *slot >= 0 ? &samples_[static_cast<std::size_t>(*slot)] : nullptr;
+    }
+
+    /// find() remembering the last block: for coherent sequences of lookups (one per thread).
+    class Accessor {
+    public:
+        explicit Accessor(const TsdfField& field) : field_(field), index_(field.index_) {}
+        const VertexSample* find(const VoxelKey& v) {
+            const std::int32_t* slot = index_.find(v);
+            return slot && *slot >= 0 ? &field_.samples_[static_cast<std::size_t>(*slot)] : nullptr;
+        }
+
+    private:
+        const TsdfField& field_;
+        BlockMap<std::int32_t>::Accessor index_;
+    };
 
     void insert(const VoxelKey& v, const VertexSample& s);
     std::size_t size() const { return keys_.size(); }
@@ -26,7 +50,7 @@ public:
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< world position of vertex (0,0,0)
 
 private:
-    std::unordered_map<VoxelKey, std::uint32_t, VoxelKeyHash> index_;
+    BlockMap<std::int32_t> index_{-1};
     std::vector<VoxelKey> keys_;
     std::vector<VertexSample> samples_;
 };

@@ -7,6 +7,8 @@
 
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/surface/local_plane.hpp"
+#include "lidarsurf/surface/neighbourhood_window.hpp"
 
 namespace lidarsurf {
 
@@ -19,9 +21,22 @@ struct VertexSample {
 };
 
 /// Evaluates vertex `v` of `grid` with `config` (already validated). `sensor_local` is the sensor
-/// position in the grid's local frame.
+/// position in the grid's local frame. The reference: Chan merges over the grid, iterative eigen
+/// solver.
 VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
                              const Eigen::Vector3d& sensor_local);
+
+/// The same through a NeighbourhoodWindow (v in the window's vertex block) with the given eigen
+/// solver: the fast path. Equal to the reference up to rounding (tests/surface).
+VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor_local, EigenSolver solver);
+
+/// The conditions of one level (Eq. 1-3 per mode) on the merged statistics of H^level(v) at
+/// `position` (local frame); a defined sample with the TSDF of Eq. (4) when they hold. Shared by
+/// both evaluations above.
+VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vector3d& position,
+                            const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
+                            EigenSolver solver);
 
 /// Covariances with lambda2 below this (relative to alpha^2) are treated as degenerate.
 double degenerate_lambda2(double voxel_size);

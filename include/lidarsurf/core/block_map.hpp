@@ -1,0 +1,198 @@
+#pragma once
+// A sparse map from lattice keys to values, stored as dense 8x8x8 blocks found through a hash map
+// of block keys (the layout of VDB leaves and voxblox blocks). Every slot of a block that exists
+// holds a value (the map's `empty` value until written), so a lookup is one hash probe for the
+// block and one array index; an Accessor remembers the last block and skips even the probe for
+// the spatially coherent lookups of the surface search and marching cubes.
+//
+// Blocks are never moved once created (held by pointer), so a pointer or reference to a slot
+// stays valid while other blocks are added. Creating blocks is not thread-safe; reading and
+// writing slots of existing blocks from several threads (distinct slots) is.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "lidarsurf/core/voxel_key.hpp"
+
+namespace lidarsurf {
+
+/// Open-addressing hash table from block keys (packed to 64 bits) to block numbers: linear
+/// probing, load <= 1/2. Much faster than std::unordered_map for this small, hot lookup.
+class BlockIndex {
+public:
+    static constexpr std::uint32_t kAbsent = 0xffffffffu;
+
+    std::uint32_t find(const VoxelKey& key) const {
+        if (keys_.empty()) return kAbsent;
+        const std::uint64_t packed = pack_key(key);
+        for (std::size_t i = mix64(packed) & mask_;; i = (i + 1) & mask_) {
+            if (keys_[i] == packed) return values_[i];
+            if (keys_[i] == kEmpty) return kAbsent;
+        }
+    }
+    /// The value of `key`, inserting `value` first if absent; .second tells whether it was.
+    std::pair<std::uint32_t, bool> try_emplace(const VoxelKey& key, std::uint32_t value) {
+        if (2 * (size_ + 1) > keys_.size()) grow(std::max<std::size_t>(64, 2 * keys_.size()));
+        const std::uint64_t packed = pack_key(key);
+        std::size_t i = mix64(packed) & mask_;
+        for (; keys_[i] != kEmpty; i = (i + 1) & mask_)
+            if (keys_[i] == packed) return {values_[i], false};
+        keys_[i] = packed;
+        values_[i] = value;
+        ++size_;
+        return {value, true};
+    }
+    void reserve(std::size_t n) {
+        std::size_t cap = 64;
+        while (cap < 2 * n) cap *= 2;
+        if (cap > keys_.size()) grow(cap);
+    }
+
+private:
+    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // pack_key never gives this
+    void grow(std::size_t capacity) {
+        std::vector<std::uint64_t> old_keys(capacity, kEmpty);
+        std::vector<std::uint32_t> old_values(capacity);
+        old_keys.swap(keys_);
+        old_values.swap(values_);
+        mask_ = capacity - 1;
+        for (std::size_t j = 0; j < old_keys.size(); ++j) {
+            if (old_keys[j] == kEmpty) continue;
+            std::size_t i = mix64(old_keys[j]) & mask_;
+            while (keys_[i] != kEmpty) i = (i + 1) & mask_;
+            keys_[i] = old_keys[j];
+            values_[i] = old_values[j];
+        }
+    }
+    std::vector<std::uint64_t> keys_;
+    std::vector<std::uint32_t> values_;
+    std::size_t mask_ = 0, size_ = 0;
+};
+
+template <typename T>
+class BlockMap {
+public:
+    static constexpr int kBits = 3;
+    static constexpr int kSize = 1 << kBits;  // 8 slots per block side
+    static constexpr int kVolume = kSize * kSize * kSize;
+    using Block = std::array<T, kVolume>;
+
+    explicit BlockMap(T empty = T{}) : empty_(empty) {}
+
+    static VoxelKey block_of(const VoxelKey& key) { return {key.x() >> kBits, key.y() >> kBits, key.z() >> kBits}; }
+    /// Index of `key` inside its block: x fastest, then y, then z.
+    static int offset_of(const VoxelKey& key) {
+        constexpr int m = kSize - 1;
+        return (key.x() & m) | ((key.y() & m) << kBits) | ((key.z() & m) << (2 * kBits));
+    }
+    /// The key at `offset` of block `block` (inverse of block_of/offset_of).
+    static VoxelKey key_at(const VoxelKey& block, int offset) {
+        constexpr int m = kSize - 1;
+        return {(block.x() << kBits) | (offset & m), (block.y() << kBits) | ((offset >> kBits) & m),
+                (block.z() << kBits) | (offset >> (2 * kBits))};
+    }
+
+    /// The block with key `block`, or nullptr.
+    const Block* find_block(const VoxelKey& block) const {
+        const std::uint32_t i = index_.find(block);
+        return i == BlockIndex::kAbsent ? nullptr : blocks_[i].get();
+    }
+    Block* find_block(const VoxelKey& block) {
+        const std::uint32_t i = index_.find(block);
+        return i == BlockIndex::kAbsent ? nullptr : blocks_[i].get();
+    }
+    /// The block with key `block`, created (filled with the empty value) if absent.
+    Block& block(const VoxelKey& block) { return *blocks_[block_index(block)]; }
+    /// Creation index of the block with key `block`, creating it if absent.
+    std::uint32_t block_index(const VoxelKey& block) {
+        const auto [i, added] = index_.try_emplace(block, static_cast<std::uint32_t>(blocks_.size()));
+        if (added) {
+            blocks_.push_back(std::make_unique<Block>());
+            blocks_.back()->fill(empty_);
+            block_keys_.push_back(block);
+        }
+        return i;
+    }
+
+    /// The slot of `key`, or nullptr when its block does not exist.
+    const T* find(const VoxelKey& key) const {
+        const Block* b = find_block(block_of(key));
+        return b ? &(*b)[static_cast<std::size_t>(offset_of(key))] : nullptr;
+    }
+    /// The slot of `key`, creating its block.
+    T& operator[](const VoxelKey& key) { return block(block_of(key))[static_cast<std::size_t>(offset_of(key))]; }
+
+    std::size_t block_count() const { return blocks_.size(); }
+    /// Block keys in creation order; block i of block_at(i).
+    const std::vector<VoxelKey>& block_keys() const { return block_keys_; }
+    const Block& block_at(std::size_t i) const { return *blocks_[i]; }
+    Block& block_at(std::size_t i) { return *blocks_[i]; }
+    /// Creation index of a block key, or -1.
+    std::int64_t index_of(const VoxelKey& block) const {
+        const std::uint32_t i = index_.find(block);
+        return i == BlockIndex::kAbsent ? -1 : static_cast<std::int64_t>(i);
+    }
+    const T& empty_value() const { return empty_; }
+
+    void reserve_blocks(std::size_t n) {
+        index_.reserve(n);
+        blocks_.reserve(n);
+        block_keys_.reserve(n);
+    }
+
+    /// Read access that remembers the last existing block looked up (blocks never move, so it
+    /// stays valid while blocks are added; an absent block is probed again each time).
+    class Accessor {
+    public:
+        explicit Accessor(const BlockMap& map) : map_(&map) {}
+        const T* find(const VoxelKey& key) {
+            const VoxelKey b = block_of(key);
+            if (!last_ || b != last_key_) {
+                const Block* found = map_->find_block(b);
+                if (!found) return nullptr;
+                last_key_ = b;
+                last_ = found;
+            }
+            return &(*last_)[static_cast<std::size_t>(offset_of(key))];
+        }
+
+    private:
+        const BlockMap* map_;
+        VoxelKey last_key_ = VoxelKey::Zero();
+        const Block* last_ = nullptr;
+    };
+
+    /// Write access (creating blocks) that remembers the last block: for one thread.
+    class WriteAccessor {
+    public:
+        explicit WriteAccessor(BlockMap& map) : map_(&map) {}
+        T& operator[](const VoxelKey& key) {
+            const VoxelKey b = block_of(key);
+            if (!last_ || b != last_key_) {
+                last_index_ = map_->block_index(b);
+                last_ = &map_->block_at(last_index_);
+                last_key_ = b;
+            }
+            return (*last_)[static_cast<std::size_t>(offset_of(key))];
+        }
+        /// Creation index of the block of the last key accessed.
+        std::uint32_t block_index() const { return last_index_; }
+
+    private:
+        BlockMap* map_;
+        VoxelKey last_key_ = VoxelKey::Zero();
+        Block* last_ = nullptr;
+        std::uint32_t last_index_ = 0;
+    };
+
+private:
+    T empty_;
+    BlockIndex index_;
+    std::vector<std::unique_ptr<Block>> blocks_;
+    std::vector<VoxelKey> block_keys_;
+};
+
+}  // namespace lidarsurf

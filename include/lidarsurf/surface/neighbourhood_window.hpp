@@ -1,0 +1,59 @@
+#pragma once
+// Fast neighbourhood statistics for the vertices of one 8^3 vertex block (issue 5). The voxel
+// index blocks that any H^k(v), k <= max_level, of those vertices can reach are looked up once
+// (3x3x3 blocks for k_max <= 8), so summing a box needs no hashing and skips empty space 64
+// voxels at a time (VoxelGrid::occupancy); and each occupied voxel is added as
+// raw moments in the frame of the vertex,
+//   n += |V|,  s1 += |V| d,  s2 += V_M2 + |V| d d^T   with d = V_mu - v,
+// which is Chan's merge (voxel_stats.cpp) expanded: no division per voxel, and small coordinates
+// (|d| <= k alpha) so no loss of precision. The result equals merge_neighbourhood() up to
+// rounding (tests/surface/test_neighbourhood_window.cpp).
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lidarsurf/core/voxel_grid.hpp"
+
+namespace lidarsurf {
+
+/// Raw moments of a set of points about a reference point p.
+struct Moments {
+    double n = 0;
+    Eigen::Vector3d s1 = Eigen::Vector3d::Zero();  ///< sum (x - p)
+    Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();  ///< sum (x - p)(x - p)^T
+
+    /// Count, mean and scatter about the mean (VoxelStats), given the reference point p.
+    VoxelStats to_stats(const Eigen::Vector3d& p) const;
+};
+
+class NeighbourhoodWindow {
+public:
+    /// Window for the vertices of vertex block `vertex_block` (vertices 8 b .. 8 b + 7 per axis)
+    /// and levels up to `max_level`.
+    NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& vertex_block, int max_level);
+
+    /// Adds the voxels of H^k(v) \ H^{k-1}(v) (all of H^1 for k = 1) to `acc`, whose reference
+    /// point is v's position. v must be in the window's vertex block and k <= max_level.
+    void grow(const VoxelKey& v, int k, Moments& acc) const;
+    /// Moments of the whole H^k(v) about v's position.
+    Moments box(const VoxelKey& v, int k) const;
+
+    double voxel_size() const { return alpha_; }
+
+private:
+    // Adds the voxels with lo <= key <= hi (inclusive) to acc.
+    void add_box(const VoxelKey& lo, const VoxelKey& hi, const Eigen::Vector3d& p, Moments& acc) const;
+
+    const VoxelStats* stats_;
+    double alpha_;
+    int radius_;   // blocks on each side of the vertex block
+    int side_;     // 2 radius + 1
+    VoxelKey first_voxel_;  // smallest voxel key covered by the window
+    struct WindowBlock {
+        const std::int32_t* index = nullptr;       // nullptr: no voxel in this block
+        const std::uint64_t* occupancy = nullptr;  // VoxelGrid::occupancy
+    };
+    std::vector<WindowBlock> blocks_;  // side^3 blocks, x fastest
+};
+
+}  // namespace lidarsurf

@@ -1,0 +1,106 @@
+#include "lidarsurf/surface/neighbourhood_window.hpp"
+
+#include <algorithm>
+#include <bit>
+
+#include "lidarsurf/surface/neighbourhood.hpp"
+
+namespace lidarsurf {
+
+VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
+    VoxelStats s;
+    if (n <= 0) return s;
+    s.count = static_cast<std::uint64_t>(n);
+    const Eigen::Vector3d d = s1 / n;
+    s.mean = p + d;
+    s.scatter = s2 - s1 * d.transpose();  // sum (x-p)(x-p)^T - n d d^T = sum (x-mu)(x-mu)^T
+    return s;
+}
+
+namespace {
+
+// Bits x0..x1 of each of the rows y0..y1 of an 8x8 layer (bit x + 8 y), 0 <= x0 <= x1 < 8.
+std::uint64_t layer_mask(int x0, int x1, int y0, int y1) {
+    const std::uint64_t row = (0xffu >> (7 - (x1 - x0))) << x0;
+    const std::uint64_t rows = (~std::uint64_t{0} >> (8 * (7 - (y1 - y0)))) << (8 * y0);  // bytes y0..y1
+    return (row * 0x0101010101010101ull) & rows;
+}
+
+}  // namespace
+
+NeighbourhoodWindow::NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& vertex_block, int max_level)
+    : stats_(grid.stats().data()), alpha_(grid.voxel_size()) {
+    using Map = BlockMap<std::int32_t>;
+    // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
+    // radius ceil(k/8) blocks of b.
+    radius_ = (max_level + Map::kSize - 1) / Map::kSize;
+    side_ = 2 * radius_ + 1;
+    first_voxel_ = (vertex_block.array() - radius_) * Map::kSize;
+    blocks_.resize(static_cast<std::size_t>(side_ * side_ * side_));
+    std::size_t i = 0;
+    for (int z = -radius_; z <= radius_; ++z)
+        for (int y = -radius_; y <= radius_; ++y)
+            for (int x = -radius_; x <= radius_; ++x, ++i) {
+                const std::int64_t b = grid.index().index_of(vertex_block + VoxelKey(x, y, z));
+                if (b >= 0)
+                    blocks_[i] = {grid.index().block_at(static_cast<std::size_t>(b)).data(),
+                                  grid.occupancy(static_cast<std::size_t>(b)).data()};
+            }
+}
+
+void NeighbourhoodWindow::add_box(const VoxelKey& lo, const VoxelKey& hi, const Eigen::Vector3d& p, Moments& acc) const {
+    constexpr int B = BlockMap<std::int32_t>::kSize, m = B - 1;
+    const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates, >= 0
+    const double px = p.x(), py = p.y(), pz = p.z();
+    double n = acc.n, s1x = acc.s1.x(), s1y = acc.s1.y(), s1z = acc.s1.z();
+    double sxx = acc.s2(0, 0), sxy = acc.s2(0, 1), sxz = acc.s2(0, 2), syy = acc.s2(1, 1), syz = acc.s2(1, 2), szz = acc.s2(2, 2);
+    for (int bz = l.z() / B; bz <= h.z() / B; ++bz)
+        for (int by = l.y() / B; by <= h.y() / B; ++by)
+            for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
+                const WindowBlock& block = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
+                if (!block.index) continue;
+                // The box within this block, in block coordinates.
+                const int x0 = std::max(l.x(), bx * B) & m, x1 = std::min(h.x(), bx * B + m) & m;
+                const int y0 = std::max(l.y(), by * B) & m, y1 = std::min(h.y(), by * B + m) & m;
+                const int z0 = std::max(l.z(), bz * B) & m, z1 = std::min(h.z(), bz * B + m) & m;
+                const std::uint64_t mask = layer_mask(x0, x1, y0, y1);
+                for (int z = z0; z <= z1; ++z) {
+                    std::uint64_t bits = block.occupancy[z] & mask;
+                    while (bits) {
+                        const int bit = std::countr_zero(bits);
+                        bits &= bits - 1;
+                        const VoxelStats& s = stats_[block.index[bit | (z << 6)]];
+                        const double w = static_cast<double>(s.count);
+                        const double dx = s.mean.x() - px, dy = s.mean.y() - py, dz = s.mean.z() - pz;
+                        const double wx = w * dx, wy = w * dy, wz = w * dz;
+                        n += w;
+                        s1x += wx, s1y += wy, s1z += wz;
+                        const Eigen::Matrix3d& m2 = s.scatter;
+                        sxx += m2(0, 0) + wx * dx, sxy += m2(0, 1) + wx * dy, sxz += m2(0, 2) + wx * dz;
+                        syy += m2(1, 1) + wy * dy, syz += m2(1, 2) + wy * dz, szz += m2(2, 2) + wz * dz;
+                    }
+                }
+            }
+    // Accumulated in locals (registers) rather than through `acc`; the scatter is symmetric.
+    acc.n = n;
+    acc.s1 = {s1x, s1y, s1z};
+    acc.s2 << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+}
+
+void NeighbourhoodWindow::grow(const VoxelKey& v, int k, Moments& acc) const {
+    const Eigen::Vector3d p = v.cast<double>() * alpha_;
+    const VoxelKey lo = v.array() - k, hi = v.array() + (k - 1);
+    if (k == 1) {
+        add_box(lo, hi, p, acc);
+        return;
+    }
+    for (const VoxelBox& b : shell_boxes(v, k)) add_box(b.lo, b.hi, p, acc);
+}
+
+Moments NeighbourhoodWindow::box(const VoxelKey& v, int k) const {
+    Moments acc;
+    add_box(v.array() - k, v.array() + (k - 1), v.cast<double>() * alpha_, acc);
+    return acc;
+}
+
+}  // namespace lidarsurf
