@@ -3,6 +3,7 @@
 // options. Errors are thrown as lidarsurf exceptions; main() maps them to exit codes.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -36,5 +37,15 @@ struct BenchmarkOptions {
 };
 CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o);
 int run_benchmark(const BenchmarkOptions& o);
+
+struct BenchOptions {
+    std::vector<std::string> scans;
+    std::string json;
+    int repeat = 7, slow_repeat = 3, frames = 3;
+    bool no_reference = false, no_imls = false, no_scaling = false;
+    ReconstructOptions reconstruct;  // the configuration timed (paper defaults)
+};
+CLI::App* add_bench_command(CLI::App& app, BenchOptions& o);
+int run_bench(const BenchOptions& o);
 
 }  // namespace lidarsurf::cli

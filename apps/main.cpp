@@ -174,6 +174,8 @@ int main(int argc, char** argv) {
     auto* rd = add_render_command(app, rdo);
     BenchmarkOptions bo;
     auto* bm = add_benchmark_command(app, bo);
+    BenchOptions bno;
+    auto* bn = add_bench_command(app, bno);
 
     try {
         app.parse(argc, argv);
@@ -187,6 +189,7 @@ int main(int argc, char** argv) {
         if (*sc) return run_simulate(so);
         if (*rd) return run_render(rdo);
         if (*bm) return run_benchmark(bo);
+        if (*bn) return run_bench(bno);
     } catch (const Error& e) {
         std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
         return exit_code(e);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <bit>
 
-#include "lidarsurf/surface/neighbourhood.hpp"
 
 namespace lidarsurf {
 
@@ -48,9 +47,12 @@ NeighbourhoodWindow::NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& 
             }
 }
 
-void NeighbourhoodWindow::add_box(const VoxelKey& lo, const VoxelKey& hi, const Eigen::Vector3d& p, Moments& acc) const {
+void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
+                                    Moments& acc) const {
     constexpr int B = BlockMap<std::int32_t>::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates, >= 0
+    // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z].
+    const VoxelKey il = l.array() + inset, ih = h.array() - inset;
     const double px = p.x(), py = p.y(), pz = p.z();
     double n = acc.n, s1x = acc.s1.x(), s1y = acc.s1.y(), s1z = acc.s1.z();
     double sxx = acc.s2(0, 0), sxy = acc.s2(0, 1), sxz = acc.s2(0, 2), syy = acc.s2(1, 1), syz = acc.s2(1, 2), szz = acc.s2(2, 2);
@@ -59,17 +61,22 @@ void NeighbourhoodWindow::add_box(const VoxelKey& lo, const VoxelKey& hi, const 
             for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
                 const WindowBlock& block = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
                 if (!block.index) continue;
-                // The box within this block, in block coordinates.
-                const int x0 = std::max(l.x(), bx * B) & m, x1 = std::min(h.x(), bx * B + m) & m;
-                const int y0 = std::max(l.y(), by * B) & m, y1 = std::min(h.y(), by * B + m) & m;
-                const int z0 = std::max(l.z(), bz * B) & m, z1 = std::min(h.z(), bz * B + m) & m;
-                const std::uint64_t mask = layer_mask(x0, x1, y0, y1);
+                // The box within this block, in block coordinates, and its 8x8 layer masks.
+                const int x0 = std::max(l.x(), bx * B), x1 = std::min(h.x(), bx * B + m);
+                const int y0 = std::max(l.y(), by * B), y1 = std::min(h.y(), by * B + m);
+                const int z0 = std::max(l.z(), bz * B), z1 = std::min(h.z(), bz * B + m);
+                const std::uint64_t full = layer_mask(x0 & m, x1 & m, y0 & m, y1 & m);
+                std::uint64_t ring = full;
+                const int hx0 = std::max(il.x(), x0), hx1 = std::min(ih.x(), x1);
+                const int hy0 = std::max(il.y(), y0), hy1 = std::min(ih.y(), y1);
+                if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
                 for (int z = z0; z <= z1; ++z) {
-                    std::uint64_t bits = block.occupancy[z] & mask;
+                    const bool cap = inset == 0 || z == l.z() || z == h.z();
+                    std::uint64_t bits = block.occupancy[z & m] & (cap ? full : ring);
                     while (bits) {
                         const int bit = std::countr_zero(bits);
                         bits &= bits - 1;
-                        const VoxelStats& s = stats_[block.index[bit | (z << 6)]];
+                        const VoxelStats& s = stats_[block.index[bit | ((z & m) << 6)]];
                         const double w = static_cast<double>(s.count);
                         const double dx = s.mean.x() - px, dy = s.mean.y() - py, dz = s.mean.z() - pz;
                         const double wx = w * dx, wy = w * dy, wz = w * dz;
@@ -88,18 +95,13 @@ void NeighbourhoodWindow::add_box(const VoxelKey& lo, const VoxelKey& hi, const 
 }
 
 void NeighbourhoodWindow::grow(const VoxelKey& v, int k, Moments& acc) const {
-    const Eigen::Vector3d p = v.cast<double>() * alpha_;
-    const VoxelKey lo = v.array() - k, hi = v.array() + (k - 1);
-    if (k == 1) {
-        add_box(lo, hi, p, acc);
-        return;
-    }
-    for (const VoxelBox& b : shell_boxes(v, k)) add_box(b.lo, b.hi, p, acc);
+    // H^k \ H^{k-1}: the box [v-k, v+k-1] without its interior [v-k+1, v+k-2] (empty for k = 1).
+    add_shell(v.array() - k, v.array() + (k - 1), k > 1 ? 1 : 0, v.cast<double>() * alpha_, acc);
 }
 
 Moments NeighbourhoodWindow::box(const VoxelKey& v, int k) const {
     Moments acc;
-    add_box(v.array() - k, v.array() + (k - 1), v.cast<double>() * alpha_, acc);
+    add_shell(v.array() - k, v.array() + (k - 1), 0, v.cast<double>() * alpha_, acc);
     return acc;
 }
 

@@ -84,6 +84,14 @@ expect 4 "not a sequence" -- "$cli" benchmark "$dir/nothere"
 expect 2 "unknown benchmark method" -- "$cli" benchmark "$seq" --methods 'AN+GC kmax=7'
 expect 2 "PNG" -- "$cli" render "$dir/mesh.ply" -o "$dir/x.jpg"
 expect 3 "not a PLY|no triangle" -- "$cli" render "$dir/gt.bin" -o "$dir/x.png"
+# bench: a user's scan, fast vs reference, table and JSON (the simulated default is exercised by
+# docs/benchmarks.md's command, too slow for this script under the sanitizers).
+expect 0 "reference" -- "$cli" bench "$dir/scan.bin" --repeat 2 --slow-repeat 1 --no-imls --no-scaling --json "$dir/bench.json"
+[ "$(grep -c '"path"' "$dir/bench.json")" -eq 2 ] || { echo "FAIL: bench JSON rows"; fail=$((fail + 1)); }
+grep -q '"total_runs_ms"' "$dir/bench.json" || { echo "FAIL: bench JSON lacks run times"; fail=$((fail + 1)); }
+expect 2 "repeat" -- "$cli" bench "$dir/scan.bin" --repeat 0
+expect 2 "voxel size" -- "$cli" bench "$dir/scan.bin" --voxel 0
+expect 4 "cannot read" -- "$cli" bench "$dir/missing.bin"
 # A failed run leaves a previous output intact and writes nothing else.
 cp "$dir/mesh.ply" "$dir/keep.ply"
 expect 2 "tau" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply" --tau -3

@@ -9,6 +9,8 @@
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/sim/analytic_scene.hpp"
+#include "lidarsurf/sim/procedural_scene.hpp"
+#include "lidarsurf/sim/simulator.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 
@@ -101,6 +103,26 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
             // The fast path evaluates far fewer vertices than the full candidate set.
             EXPECT_LT(fast.summary().candidate_vertices, reference.summary().candidate_vertices) << what;
         }
+    }
+}
+
+// A simulated HDL-64 frame of the procedural town (the benchmark's scene): the fast path's
+// windowed sums and closed-form eigen solver give the reference mesh on a real-size scan too.
+TEST(SeededSurface, FastPathGivesTheReferenceMeshOnATownFrame) {
+    sim::SimulatorConfig sc;
+    sc.gt_beams = 0;
+    const sim::Simulator simulator(sim::make_world(sim::SceneConfig{}), sc);
+    const PointCloud cloud = simulator.frame(37).scan;  // sensor frame
+    ASSERT_GT(cloud.points.size(), 100000u);
+    for (Mode mode : {Mode::AdaptiveGaussian, Mode::Constant}) {
+        ReconstructionConfig c;
+        c.mode = mode;
+        Reconstructor fast(c, Eigen::Vector3d::Zero()), reference(c, Eigen::Vector3d::Zero());
+        fast.integrate(cloud);
+        reference.integrate(cloud);
+        const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
+        ASSERT_GT(a.triangles.size(), 20000u);
+        expect_same_mesh(a, b, std::string("town ") + std::string(to_string(mode)));
     }
 }
 

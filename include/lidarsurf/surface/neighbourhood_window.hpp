@@ -41,8 +41,10 @@ public:
     double voxel_size() const { return alpha_; }
 
 private:
-    // Adds the voxels with lo <= key <= hi (inclusive) to acc.
-    void add_box(const VoxelKey& lo, const VoxelKey& hi, const Eigen::Vector3d& p, Moments& acc) const;
+    // Adds the voxels of the box lo <= key <= hi (inclusive) to acc, without its interior box
+    // [lo + inset, hi - inset] when inset > 0 (a shell). One pass over the window blocks, one
+    // 64-bit mask per 8x8 layer.
+    void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc) const;
 
     const VoxelStats* stats_;
     double alpha_;

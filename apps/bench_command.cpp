@@ -1,0 +1,260 @@
+// lidarsurf bench: end-to-end speed (read -> voxel statistics -> TSDF -> marching cubes) per stage,
+// as medians over repeated runs, with peak memory, throughput, the ratios to the reference path and
+// to IMLS, and the scaling with input size and threads (issue 5). Without scans it simulates
+// HDL-64 frames of the procedural town.
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "lidarsurf/io/point_writer.hpp"
+#include "lidarsurf/sim/procedural_scene.hpp"
+#include "lidarsurf/sim/simulator.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lidarsurf::cli {
+namespace {
+
+// Peak resident memory of this process since the last reset_peak_rss(), in MiB (Linux VmHWM;
+// writing 5 to clear_refs resets it). -1 when unavailable.
+void reset_peak_rss() {
+    std::ofstream f("/proc/self/clear_refs");
+    if (f) f << "5";
+}
+double peak_rss_mib() {
+    std::ifstream f("/proc/self/status");
+    std::string line;
+    while (std::getline(f, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+    return -1;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+enum class Path { Fast, Reference, Imls };
+const char* path_name(Path p) { return p == Path::Fast ? "fast" : (p == Path::Reference ? "reference" : "imls"); }
+
+// One row of the table: stage times of `repeat` runs on one scan.
+struct Row {
+    std::string scan, path;
+    std::size_t points = 0, triangles = 0;
+    int threads = 0, repeat = 0;
+    // Per-stage times (ms) of every run. IMLS: insert = normals, tsdf = implicit function.
+    std::vector<double> read, insert, tsdf, mesh, total;
+    double peak_rss = -1;
+
+    double median_total() const { return median(total); }
+    double min_total() const { return *std::min_element(total.begin(), total.end()); }
+};
+
+Row run_row(const fs::path& scan, const std::string& label, Path path, const Method& method, int threads, int repeat) {
+    Row row;
+    row.scan = label;
+    row.path = path_name(path);
+    row.threads = threads;
+    row.repeat = repeat;
+    reset_peak_rss();
+    for (int r = 0; r < repeat; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const PointCloud cloud = read_points(scan, method.read);
+        const double read_ms = ms_since(t0);
+        double insert = 0, tsdf = 0, mesh_ms = 0;
+        Mesh mesh;
+        if (path == Path::Imls) {
+            ImlsConfig ic = method.imls_config;
+            ic.threads = threads;
+            ImlsSummary s;
+            mesh = reconstruct_imls(cloud, method.sensor, ic, &s);
+            insert = 1e3 * s.seconds_normals;
+            tsdf = 1e3 * s.seconds_field;
+            mesh_ms = 1e3 * s.seconds_mesh;
+        } else {
+            ReconstructionConfig c = method.config;
+            c.threads = threads;
+            Reconstructor rec(c, method.sensor);
+            rec.integrate(cloud);
+            mesh = rec.extract_mesh(path == Path::Fast ? Evaluation::Fast : Evaluation::Reference);
+            insert = 1e3 * rec.summary().seconds_insert;
+            tsdf = 1e3 * rec.summary().seconds_tsdf;
+            mesh_ms = 1e3 * rec.summary().seconds_mesh;
+        }
+        row.points = cloud.points.size();
+        row.triangles = mesh.triangles.size();
+        row.read.push_back(read_ms);
+        row.insert.push_back(insert);
+        row.tsdf.push_back(tsdf);
+        row.mesh.push_back(mesh_ms);
+        row.total.push_back(read_ms + insert + tsdf + mesh_ms);
+    }
+    row.peak_rss = peak_rss_mib();
+    return row;
+}
+
+std::string format_rows(const std::vector<Row>& rows, bool ratios) {
+    std::ostringstream out;
+    char buf[320];
+    std::snprintf(buf, sizeof buf, "%-16s %8s %-9s %3s %7s %7s %8s %7s %9s %9s %7s %8s%s\n", "scan", "points", "path", "thr",
+                  "read", "insert", "tsdf", "mesh", "total", "min", "Mpts/s", "peakMiB", ratios ? "  x fast" : "");
+    out << buf;
+    const Row* fast = nullptr;
+    for (const Row& r : rows) {
+        if (r.path == "fast" && (!fast || fast->scan != r.scan)) fast = &r;
+        if (fast && fast->scan != r.scan) fast = nullptr;
+        const double t = r.median_total();
+        std::snprintf(buf, sizeof buf, "%-16s %8zu %-9s %3d %7.1f %7.1f %8.1f %7.1f %9.1f %9.1f %7.2f %8.0f", r.scan.c_str(),
+                      r.points, r.path.c_str(), r.threads, median(r.read), median(r.insert), median(r.tsdf), median(r.mesh), t,
+                      r.min_total(), 1e-3 * static_cast<double>(r.points) / t, r.peak_rss);
+        out << buf;
+        if (ratios && fast) {
+            std::snprintf(buf, sizeof buf, " %8.2f", t / fast->median_total());
+            out << buf;
+        }
+        out << "\n";
+    }
+    return out.str();
+}
+
+nlohmann::json to_json(const Row& r) {
+    return {{"scan", r.scan},           {"path", r.path},           {"points", r.points},
+            {"threads", r.threads},     {"repeat", r.repeat},       {"triangles", r.triangles},
+            {"read_ms", median(r.read)}, {"insert_ms", median(r.insert)}, {"tsdf_ms", median(r.tsdf)},
+            {"mesh_ms", median(r.mesh)}, {"total_ms", r.median_total()},  {"total_min_ms", r.min_total()},
+            {"peak_rss_mib", r.peak_rss}, {"total_runs_ms", r.total}};
+}
+
+// Simulated town frames (sensor frame, KITTI .bin) in `dir`: `frames` frames spread over a
+// 100-frame drive, and the middle frame at 4 azimuth resolutions for the size scaling.
+struct SimulatedInputs {
+    std::vector<std::pair<fs::path, std::string>> frames, sizes;
+};
+SimulatedInputs simulate_inputs(const fs::path& dir, int frames) {
+    SimulatedInputs in;
+    sim::SceneConfig scene;  // town, seed 1: the benchmark sequence of docs/benchmarks.md
+    const sim::World world = sim::make_world(scene);
+    sim::SimulatorConfig sc;
+    sc.gt_beams = 0;
+    const sim::Simulator simulator(world, sc);
+    for (int i = 0; i < frames; ++i) {
+        const std::size_t index = static_cast<std::size_t>((i + 1) * 100 / (frames + 1));
+        char name[64];
+        std::snprintf(name, sizeof name, "town_%03zu.bin", index);
+        write_points(simulator.frame(index).scan, dir / name);
+        in.frames.emplace_back(dir / name, std::string("town ") + std::to_string(index));
+    }
+    // Same scene and beams, azimuth step 0.72 / 0.36 / 0.18 / 0.09 deg: ~30k / 60k / 120k / 240k points.
+    for (double step : {0.72, 0.36, 0.18, 0.09}) {
+        sim::SimulatorConfig s2 = sc;
+        s2.sensor.azimuth_step_deg = step;
+        const sim::Simulator sized(world, s2);
+        char name[64];
+        std::snprintf(name, sizeof name, "town_050_az%.2f.bin", step);
+        write_points(sized.frame(50).scan, dir / name);
+        char label[64];
+        std::snprintf(label, sizeof label, "az %.2f deg", step);
+        in.sizes.emplace_back(dir / name, label);
+    }
+    return in;
+}
+
+}  // namespace
+
+CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
+    CLI::App* b = app.add_subcommand("bench", "End-to-end speed per stage: fast path vs reference vs IMLS, size and thread scaling");
+    b->add_option("scans", o.scans, "Scans to time (default: simulated HDL-64 town frames)");
+    b->add_option("--repeat", o.repeat, "Runs per row for the fast path (median reported)")->capture_default_str();
+    b->add_option("--slow-repeat", o.slow_repeat, "Runs per row for the reference path and IMLS")->capture_default_str();
+    b->add_option("--frames", o.frames, "Simulated frames when no scan is given")->capture_default_str();
+    b->add_flag("--no-reference", o.no_reference, "Skip the reference path");
+    b->add_flag("--no-imls", o.no_imls, "Skip IMLS");
+    b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables");
+    b->add_option("--json", o.json, "Also write every row (all run times) as JSON");
+    add_reconstruct_options(b, o.reconstruct);
+    b->footer("Example:\n  lidarsurf bench                      # simulated town frames\n"
+              "  lidarsurf bench ../shared/data/kitti/*.bin --repeat 11");
+    return b;
+}
+
+int run_bench(const BenchOptions& o) {
+    if (o.repeat < 1 || o.repeat > 1000) throw InvalidArgument("--repeat must be in [1, 1000]");
+    if (o.slow_repeat < 1 || o.slow_repeat > 1000) throw InvalidArgument("--slow-repeat must be in [1, 1000]");
+    if (o.frames < 1 || o.frames > 100) throw InvalidArgument("--frames must be in [1, 100]");
+    const Method method = resolve_method(o.reconstruct);
+    const int threads = method.config.threads;  // 0 = all cores
+
+    std::vector<std::pair<fs::path, std::string>> scans, sizes;
+    fs::path tmp;
+    if (o.scans.empty()) {
+        tmp = fs::temp_directory_path() / ("lidarsurf-bench-" + std::to_string(::getpid()));
+        fs::create_directories(tmp);
+        std::fprintf(stderr, "bench: simulating %d town frames and 4 resolutions in %s\n", o.frames, tmp.c_str());
+        SimulatedInputs in = simulate_inputs(tmp, o.frames);
+        scans = in.frames;
+        sizes = in.sizes;
+    } else {
+        for (const std::string& s : o.scans) {
+            if (!fs::is_regular_file(s)) throw IoError("cannot read '" + s + "': not a file");
+            scans.emplace_back(s, fs::path(s).filename().string());
+        }
+    }
+    auto cleanup = [&] {
+        std::error_code ec;
+        if (!tmp.empty()) fs::remove_all(tmp, ec);
+    };
+    try {
+        std::vector<Row> rows, size_rows, thread_rows;
+        for (const auto& [path, label] : scans) {
+            std::fprintf(stderr, "bench: %s\n", label.c_str());
+            rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
+            if (!o.no_reference) rows.push_back(run_row(path, label, Path::Reference, method, threads, o.slow_repeat));
+            if (!o.no_imls) rows.push_back(run_row(path, label, Path::Imls, method, threads, o.slow_repeat));
+        }
+        if (!o.no_scaling) {
+            if (sizes.empty()) sizes.push_back(scans.front());
+            for (const auto& [path, label] : sizes) size_rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
+            const auto& mid = sizes.size() == 4 ? sizes[2] : sizes.front();
+            for (int t : {1, 2}) thread_rows.push_back(run_row(mid.first, mid.second, Path::Fast, method, t, o.repeat));
+        }
+
+        std::printf("lidarsurf bench: mode %s, alpha %.3g m, tau %.3g, N_min %d, k_max %d; times in ms, median of %d runs "
+                    "(reference and IMLS: %d), min = fastest run; %u hardware threads\n",
+                    std::string(to_string(method.config.mode)).c_str(), method.config.voxel_size, method.config.tau,
+                    method.config.n_min, method.config.k_max, o.repeat, o.slow_repeat, std::thread::hardware_concurrency());
+        std::printf("total = read + insert + tsdf + mesh (IMLS: insert = normals, tsdf = implicit function)\n\n");
+        std::fputs(format_rows(rows, true).c_str(), stdout);
+        if (!size_rows.empty()) {
+            std::printf("\nscaling with input size (fast path):\n");
+            std::fputs(format_rows(size_rows, false).c_str(), stdout);
+            std::printf("\nscaling with threads (fast path):\n");
+            std::fputs(format_rows(thread_rows, false).c_str(), stdout);
+            const double s = thread_rows[0].median_total() / thread_rows[1].median_total();
+            std::printf("speed-up 1 -> 2 threads: %.2fx\n", s);
+        }
+        if (!o.json.empty()) {
+            nlohmann::json j;
+            for (const char* key : {"rows", "sizes", "threads"}) j[key] = nlohmann::json::array();
+            for (const Row& r : rows) j["rows"].push_back(to_json(r));
+            for (const Row& r : size_rows) j["sizes"].push_back(to_json(r));
+            for (const Row& r : thread_rows) j["threads"].push_back(to_json(r));
+            write_text(o.json, j.dump(2) + "\n");
+        }
+    } catch (...) {
+        cleanup();
+        throw;
+    }
+    cleanup();
+    return 0;
+}
+
+}  // namespace lidarsurf::cli

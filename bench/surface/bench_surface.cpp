@@ -1,0 +1,82 @@
+// Stages 2-3: neighbourhood statistics, plane + confidence, and the whole TSDF, each as the
+// reference and as the fast path, on the vertices of the town frame's seeded surface.
+#include <benchmark/benchmark.h>
+
+#include "bench_data.hpp"
+#include "lidarsurf/surface/neighbourhood.hpp"
+#include "lidarsurf/surface/neighbourhood_window.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
+#include "lidarsurf/surface/tsdf_field.hpp"
+
+namespace lidarsurf::bench {
+namespace {
+
+const VoxelGrid& grid() {
+    static const VoxelGrid g = town_grid();
+    return g;
+}
+// A sample of the vertices the fast path evaluates: the defined ones of its field.
+const std::vector<VoxelKey>& vertices() {
+    static const std::vector<VoxelKey> v = [] {
+        const SeededTsdf s = compute_seeded_tsdf(grid(), ReconstructionConfig{}, Eigen::Vector3d::Zero());
+        std::vector<VoxelKey> out;
+        for (std::size_t i = 0; i < s.field.keys().size(); i += 7) out.push_back(s.field.keys()[i]);
+        return out;
+    }();
+    return v;
+}
+
+// H^1..H^5 of each vertex, shell by shell: Chan merges through the grid (reference) ...
+void BM_NeighbourhoodReference(benchmark::State& state) {
+    for (auto _ : state)
+        for (const VoxelKey& v : vertices()) {
+            VoxelStats acc;
+            for (int k = 1; k <= 5; ++k) grow_neighbourhood(grid(), v, k, acc);
+            benchmark::DoNotOptimize(acc.count);
+        }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(vertices().size()));
+}
+BENCHMARK(BM_NeighbourhoodReference)->Unit(benchmark::kMillisecond);
+
+// ... and raw moments over the occupancy bits of a NeighbourhoodWindow (fast path).
+void BM_NeighbourhoodWindow(benchmark::State& state) {
+    for (auto _ : state)
+        for (const VoxelKey& v : vertices()) {
+            const NeighbourhoodWindow w(grid(), BlockMap<std::int32_t>::block_of(v), 5);
+            Moments acc;
+            for (int k = 1; k <= 5; ++k) w.grow(v, k, acc);
+            benchmark::DoNotOptimize(acc.n);
+        }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(vertices().size()));
+}
+BENCHMARK(BM_NeighbourhoodWindow)->Unit(benchmark::kMillisecond);
+
+// Plane (Eq. 1-2) + Gaussian confidence (Eq. 3) on H^3 of each vertex, per eigen solver.
+void BM_PlaneAndConfidence(benchmark::State& state) {
+    const auto solver = static_cast<EigenSolver>(state.range(0));
+    std::vector<VoxelStats> stats;
+    for (const VoxelKey& v : vertices()) stats.push_back(merge_neighbourhood(grid(), v, 3));
+    const ReconstructionConfig c;
+    for (auto _ : state)
+        for (std::size_t i = 0; i < stats.size(); ++i)
+            benchmark::DoNotOptimize(evaluate_level(stats[i], 3, vertices()[i].cast<double>() * 0.2, c, Eigen::Vector3d::Zero(),
+                                                    degenerate_lambda2(0.2), solver));
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(stats.size()));
+    state.SetLabel(solver == EigenSolver::Iterative ? "iterative" : "closed form");
+}
+BENCHMARK(BM_PlaneAndConfidence)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The whole TSDF stage: every candidate vertex (reference) vs the seeded fast path.
+void BM_TsdfReference(benchmark::State& state) {
+    for (auto _ : state) benchmark::DoNotOptimize(compute_tsdf(grid(), ReconstructionConfig{}, Eigen::Vector3d::Zero()).size());
+}
+BENCHMARK(BM_TsdfReference)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+void BM_TsdfFast(benchmark::State& state) {
+    for (auto _ : state)
+        benchmark::DoNotOptimize(compute_seeded_tsdf(grid(), ReconstructionConfig{}, Eigen::Vector3d::Zero()).cubes.size());
+}
+BENCHMARK(BM_TsdfFast)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace lidarsurf::bench

@@ -1,0 +1,87 @@
+// BlockMap against std::map (the oracle) on random keys, negative ones included; the accessors;
+// the grid's occupancy bits against its index.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <tuple>
+
+#include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/voxel_grid.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+using Tuple = std::tuple<int, int, int>;
+Tuple tuple_of(const VoxelKey& k) { return {k.x(), k.y(), k.z()}; }
+}  // namespace
+
+TEST(BlockMap, MatchesAnOrderedMapOnRandomKeys) {
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> near(-40, 40), far(-kMaxLatticeIndex, kMaxLatticeIndex);
+    BlockMap<int> map(-1);
+    std::map<Tuple, int> oracle;
+    BlockMap<int>::WriteAccessor writer(map);
+    for (int i = 0; i < 20000; ++i) {
+        const bool wide = i % 10 == 0;
+        const VoxelKey k = wide ? VoxelKey(far(rng), far(rng), far(rng)) : VoxelKey(near(rng), near(rng), near(rng));
+        if (i % 2) map[k] = i; else writer[k] = i;
+        oracle[tuple_of(k)] = i;
+    }
+    BlockMap<int>::Accessor reader(map);
+    for (int i = 0; i < 20000; ++i) {
+        const VoxelKey k(near(rng), near(rng), near(rng));
+        auto it = oracle.find(tuple_of(k));
+        const int* slot = map.find(k);
+        const int* via_accessor = reader.find(k);
+        EXPECT_EQ(slot, via_accessor);
+        if (it == oracle.end()) {
+            EXPECT_TRUE(slot == nullptr || *slot == -1);
+        } else {
+            ASSERT_NE(slot, nullptr);
+            EXPECT_EQ(*slot, it->second);
+        }
+    }
+    for (const auto& [t, value] : oracle) {
+        const VoxelKey k(std::get<0>(t), std::get<1>(t), std::get<2>(t));
+        ASSERT_NE(map.find(k), nullptr);
+        EXPECT_EQ(*map.find(k), value);
+    }
+    // Every block's keys map back to that block; key_at inverts block_of/offset_of.
+    for (std::size_t b = 0; b < map.block_count(); ++b) {
+        const VoxelKey bk = map.block_keys()[b];
+        EXPECT_EQ(map.index_of(bk), static_cast<std::int64_t>(b));
+        for (int o = 0; o < BlockMap<int>::kVolume; o += 37) {
+            const VoxelKey k = BlockMap<int>::key_at(bk, o);
+            EXPECT_EQ(BlockMap<int>::block_of(k), bk);
+            EXPECT_EQ(BlockMap<int>::offset_of(k), o);
+        }
+    }
+}
+
+TEST(BlockMap, SlotsStayValidWhileBlocksAreAdded) {
+    BlockMap<int> map(0);
+    int& first = map[{0, 0, 0}];
+    first = 42;
+    for (int i = 1; i < 5000; ++i) map[{8 * i, -8 * i, 3 * i}] = i;  // thousands of new blocks, index rehashed
+    EXPECT_EQ(first, 42);
+    EXPECT_EQ(&first, map.find({0, 0, 0}));
+}
+
+TEST(VoxelGrid, OccupancyBitsMatchTheIndex) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-3.0, 3.0);
+    VoxelGrid grid(0.2);
+    for (int i = 0; i < 3000; ++i) grid.insert({u(rng), u(rng), 0.2 * u(rng)});
+    std::size_t occupied = 0;
+    for (std::size_t b = 0; b < grid.index().block_count(); ++b) {
+        const auto& block = grid.index().block_at(b);
+        const auto& occ = grid.occupancy(b);
+        for (int o = 0; o < BlockMap<std::int32_t>::kVolume; ++o) {
+            const bool bit = (occ[static_cast<std::size_t>(o >> 6)] >> (o & 63)) & 1u;
+            EXPECT_EQ(bit, block[static_cast<std::size_t>(o)] >= 0) << "block " << b << " offset " << o;
+            occupied += bit;
+        }
+    }
+    EXPECT_EQ(occupied, grid.size());
+}

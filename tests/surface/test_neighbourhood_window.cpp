@@ -1,0 +1,93 @@
+// The fast path's neighbourhood sums and vertex evaluation against the reference ones: the
+// window's raw moments against merge_neighbourhood (itself checked against a direct computation
+// in test_neighbourhood.cpp), and the windowed evaluate_vertex against the reference
+// evaluate_vertex, for both eigen solvers, far from the world origin and across block borders.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "lidarsurf/surface/neighbourhood.hpp"
+#include "lidarsurf/surface/neighbourhood_window.hpp"
+#include "lidarsurf/surface/vertex_evaluator.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+
+// A wavy surface with noise, far from the world origin, spanning several blocks.
+VoxelGrid wavy_grid(double alpha) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-3.0, 3.0);
+    std::normal_distribution<double> noise(0.0, 0.01);
+    VoxelGrid grid(alpha);
+    const Eigen::Vector3d offset(3.1e5, 4.2e6, 55.0);
+    for (int i = 0; i < 30000; ++i) {
+        const double x = u(rng), y = u(rng);
+        grid.insert(offset + Eigen::Vector3d(x, y, 0.4 * std::sin(x) * std::cos(0.7 * y) + noise(rng)));
+    }
+    return grid;
+}
+
+VoxelKey vertex_block(const VoxelKey& v) { return BlockMap<std::int32_t>::block_of(v); }
+
+void expect_same_stats(const VoxelStats& a, const VoxelStats& b, double alpha, const std::string& what) {
+    ASSERT_EQ(a.count, b.count) << what;
+    if (a.count == 0) return;
+    EXPECT_LT((a.mean - b.mean).norm(), 1e-12 * alpha * 100) << what;
+    EXPECT_LT((a.scatter - b.scatter).norm(), 1e-9 * alpha * alpha * static_cast<double>(a.count)) << what;
+}
+
+}  // namespace
+
+TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
+    const double alpha = 0.2;
+    const VoxelGrid grid = wavy_grid(alpha);
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> c(-16, 16), cz(-4, 4);
+    for (int max_level : {5, 12}) {  // 12 > 8: a window of 5x5x5 blocks
+        for (int trial = 0; trial < 200; ++trial) {
+            const VoxelKey v(c(rng), c(rng), cz(rng));
+            const NeighbourhoodWindow window(grid, vertex_block(v), max_level);
+            Moments grown;
+            const Eigen::Vector3d p = v.cast<double>() * alpha;
+            for (int k = 1; k <= max_level; ++k) {
+                window.grow(v, k, grown);
+                const VoxelStats reference = merge_neighbourhood(grid, v, k);
+                const std::string what = "v=" + std::to_string(v.x()) + "," + std::to_string(v.y()) + "," +
+                                         std::to_string(v.z()) + " k=" + std::to_string(k);
+                expect_same_stats(grown.to_stats(p), reference, alpha, what + " (grown)");
+                expect_same_stats(window.box(v, k).to_stats(p), reference, alpha, what + " (box)");
+            }
+        }
+    }
+}
+
+TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
+    const double alpha = 0.2;
+    const VoxelGrid grid = wavy_grid(alpha);
+    const Eigen::Vector3d sensor = grid.to_local(grid.origin() + Eigen::Vector3d(0.5, -0.3, 2.0));
+    std::size_t defined = 0, compared = 0;
+    for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
+        ReconstructionConfig config;
+        config.mode = mode;
+        config.k = 3;
+        for (EigenSolver solver : {EigenSolver::Iterative, EigenSolver::ClosedForm})
+            for (int z = -3; z <= 3; ++z)
+                for (int y = -14; y <= 14; y += 2)
+                    for (int x = -14; x <= 14; ++x) {
+                        const VoxelKey v(x, y, z);
+                        const NeighbourhoodWindow window(grid, vertex_block(v), config.max_level());
+                        const VertexSample fast = evaluate_vertex(window, v, config, sensor, solver);
+                        const VertexSample ref = evaluate_vertex(grid, v, config, sensor);
+                        ++compared;
+                        ASSERT_EQ(fast.defined, ref.defined) << to_string(mode) << " v=" << v.transpose();
+                        if (!ref.defined) continue;
+                        ++defined;
+                        EXPECT_EQ(fast.level, ref.level);
+                        EXPECT_NEAR(fast.tsdf, ref.tsdf, 1e-6 * alpha);
+                        EXPECT_NEAR(fast.confidence, ref.confidence, 1e-5 * std::max(1.0f, ref.confidence));
+                        EXPECT_GT(fast.normal.dot(ref.normal), 1.0f - 1e-6f);
+                    }
+    }
+    EXPECT_GT(defined, compared / 4);  // the comparison is not vacuous
+}
