@@ -108,16 +108,15 @@ std::string format_rows(const std::vector<Row>& rows, bool ratios) {
     std::snprintf(buf, sizeof buf, "%-16s %8s %-9s %3s %7s %7s %8s %7s %9s %9s %7s %8s%s\n", "scan", "points", "path", "thr",
                   "read", "insert", "tsdf", "mesh", "total", "min", "Mpts/s", "peakMiB", ratios ? "  x fast" : "");
     out << buf;
-    const Row* fast = nullptr;
+    const Row* fast = nullptr;  // the fast-path row of the current scan (rows come grouped by scan, fast first)
     for (const Row& r : rows) {
-        if (r.path == "fast" && (!fast || fast->scan != r.scan)) fast = &r;
-        if (fast && fast->scan != r.scan) fast = nullptr;
+        if (r.path == "fast") fast = &r;
         const double t = r.median_total();
         std::snprintf(buf, sizeof buf, "%-16s %8zu %-9s %3d %7.1f %7.1f %8.1f %7.1f %9.1f %9.1f %7.2f %8.0f", r.scan.c_str(),
                       r.points, r.path.c_str(), r.threads, median(r.read), median(r.insert), median(r.tsdf), median(r.mesh), t,
                       r.min_total(), 1e-3 * static_cast<double>(r.points) / t, r.peak_rss);
         out << buf;
-        if (ratios && fast) {
+        if (ratios && fast && fast->scan == r.scan) {
             std::snprintf(buf, sizeof buf, " %8.2f", t / fast->median_total());
             out << buf;
         }

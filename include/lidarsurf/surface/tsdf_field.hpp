@@ -22,19 +22,13 @@ public:
         : voxel_size(voxel_size_), origin(origin_), index_(std::move(index)), keys_(std::move(keys)), samples_(std::move(samples)) {}
 
     /// Sample at lattice vertex v, or nullptr if v is undefined.
-    const VertexSample* find(const VoxelKey& v) const {
-        const std::int32_t* slot = index_.find(v);
-        return slot && *slot >= 0 ? &samples_[static_cast<std::size_t>(*slot)] : nullptr;
-    }
+    const VertexSample* find(const VoxelKey& v) const { return sample_at(index_.find(v)); }
 
     /// find() remembering the last block: for coherent sequences of lookups (one per thread).
     class Accessor {
     public:
         explicit Accessor(const TsdfField& field) : field_(field), index_(field.index_) {}
-        const VertexSample* find(const VoxelKey& v) {
-            const std::int32_t* slot = index_.find(v);
-            return slot && *slot >= 0 ? &field_.samples_[static_cast<std::size_t>(*slot)] : nullptr;
-        }
+        const VertexSample* find(const VoxelKey& v) { return field_.sample_at(index_.find(v)); }
 
     private:
         const TsdfField& field_;
@@ -50,6 +44,11 @@ public:
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< world position of vertex (0,0,0)
 
 private:
+    // The sample an index slot points to; nullptr for an absent block or an undefined vertex.
+    const VertexSample* sample_at(const std::int32_t* slot) const {
+        return slot && *slot >= 0 ? &samples_[static_cast<std::size_t>(*slot)] : nullptr;
+    }
+
     BlockMap<std::int32_t> index_{-1};
     std::vector<VoxelKey> keys_;
     std::vector<VertexSample> samples_;
