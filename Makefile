@@ -2,13 +2,16 @@
 # configure, build and run; nothing else is needed on a fresh machine.
 BUILD ?= build
 ASAN_BUILD ?= build-asan
+TSAN_BUILD ?= build-tsan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
 JOBS ?= $(shell nproc)
 PREFIX ?= /usr/local
 CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize install package-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz install package-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -35,6 +38,21 @@ sanitize: setup
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS)
+
+# The parallel code under ThreadSanitizer (third build directory): the tests whose code runs TBB
+# loops (surface search, reference TSDF, IMLS, metrics, simulator, renderer, pipeline).
+TSAN_FILTER ?= SeededSurface.*:Pipeline.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*
+tsan: setup
+	cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=thread -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
+	cmake --build $(TSAN_BUILD) -j $(JOBS) --target lidarsurf_tests
+	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" $(TSAN_BUILD)/tests/lidarsurf_tests --gtest_filter='$(TSAN_FILTER)'
+
+# libFuzzer harnesses (clang, ASan+UBSan) run FUZZ_SECONDS each on fuzz/corpus/; see docs/reliability.md.
+fuzz:
+	@bash scripts/setup.sh fuzz
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_BUILD_FUZZERS=ON -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_TESTS=OFF -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS)
+	bash scripts/run_fuzzers.sh $(FUZZ_BUILD)/fuzz $(FUZZ_SECONDS)
 
 # The Python package in the build tree: PYTHONPATH=$(BUILD)/python /usr/bin/python3 -c 'import lidarsurf'
 python: build

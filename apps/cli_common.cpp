@@ -39,8 +39,9 @@ void refuse_overwriting_input(const fs::path& input, const fs::path& output) {
         throw InvalidArgument("output '" + output.string() + "' is the input file; refusing to overwrite it");
 }
 
-// 2: the user's arguments; 3: the data; 4: the file system.
+// 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget.
 int exit_code(const Error& e) {
+    if (dynamic_cast<const ResourceLimit*>(&e)) return 5;
     if (dynamic_cast<const InvalidArgument*>(&e)) return 2;
     if (dynamic_cast<const FormatError*>(&e) || dynamic_cast<const InvalidInput*>(&e)) return 3;
     if (dynamic_cast<const IoError*>(&e)) return 4;
@@ -62,6 +63,7 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
     app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)")->capture_default_str();
     app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)")->capture_default_str();
     app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel")->capture_default_str();
+    app->add_option("--max-memory", c.max_memory_mb, "Memory budget in MiB: refuse (exit 5, with the estimate) a cloud needing more")->capture_default_str();
     app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
     app->add_option("--bin-fields", o.bin_fields, "float32 values per point in .bin input (KITTI 4, nuScenes 5)")->capture_default_str();

@@ -1,5 +1,6 @@
 // lidarsurf command-line tool. The only place where library exceptions become messages and
-// exit codes: 0 success, 1 internal error, 2 bad arguments, 3 bad input data, 4 file system error.
+// exit codes: 0 success, 1 internal error, 2 bad arguments, 3 bad input data, 4 file system error,
+// 5 over the memory budget (--max-memory).
 #include <cctype>
 #include <chrono>
 #include <cmath>

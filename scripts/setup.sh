@@ -19,6 +19,8 @@ PKGS=(
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
 )
+# `setup.sh fuzz`: also clang and its libFuzzer runtime (make fuzz).
+if [ "${1:-}" = "fuzz" ]; then PKGS+=(clang libclang-rt-14-dev); fi
 
 missing=()
 for p in "${PKGS[@]}"; do

@@ -1,5 +1,7 @@
 #include "lidarsurf/pipeline.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstdio>
 
@@ -25,8 +27,9 @@ std::string ReconstructionSummary::to_string() const {
     char buf[512];
     std::snprintf(buf, sizeof buf,
                   "points %zu (dropped %zu non-finite), voxels %zu, vertices evaluated %zu, defined %zu, "
-                  "mesh %zu vertices %zu triangles; time insert %.1f ms, tsdf %.1f ms, mesh %.1f ms, total %.1f ms",
+                  "mesh %zu vertices %zu triangles, memory estimate %.0f MiB; time insert %.1f ms, tsdf %.1f ms, mesh %.1f ms, total %.1f ms",
                   points_read, points_dropped, voxels, candidate_vertices, defined_vertices, mesh_vertices, mesh_triangles,
+                  static_cast<double>(memory_estimate) / 1048576.0,
                   1e3 * seconds_insert, 1e3 * seconds_tsdf, 1e3 * seconds_mesh,
                   1e3 * (seconds_insert + seconds_tsdf + seconds_mesh));
     return buf;
@@ -42,12 +45,24 @@ void Reconstructor::integrate(const PointCloud& cloud) { integrate(std::span<con
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
     const auto t0 = std::chrono::steady_clock::now();
     summary_.points_read += points.size();
-    for (const auto& p : points) {
-        if (!p.allFinite()) {
-            ++summary_.points_dropped;
-            continue;
+    constexpr std::size_t kChunk = 1 << 16;  // the budget is checked between chunks
+    const std::size_t before = grid_.memory_bytes();
+    for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
+        const std::size_t end = std::min(points.size(), begin + kChunk);
+        for (std::size_t i = begin; i < end; ++i) {
+            if (!points[i].allFinite()) {
+                ++summary_.points_dropped;
+                continue;
+            }
+            grid_.insert(points[i]);
         }
-        grid_.insert(p);
+        const double used = static_cast<double>(grid_.memory_bytes());
+        if (used > budget_bytes()) {
+            // Extrapolate this call's growth to all of its points for the message.
+            const double growth = (used - static_cast<double>(before)) * static_cast<double>(points.size()) / static_cast<double>(end);
+            throw ResourceLimit(over_budget("the voxel grid", static_cast<double>(before) + growth,
+                                            std::to_string(points.size()) + " points at voxel size " + std::to_string(config_.voxel_size) + " m"));
+        }
     }
     summary_.voxels = grid_.size();
     summary_.seconds_insert += seconds_since(t0);
@@ -57,6 +72,13 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     if (grid_.point_count() == 0)
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + std::to_string(summary_.points_read) + " dropped)");
+    const auto budget = static_cast<std::size_t>(budget_bytes());
+    summary_.memory_estimate = grid_.memory_bytes() + estimate_extraction_bytes(grid_, config_, evaluation, budget);
+    const double needed = static_cast<double>(summary_.memory_estimate);
+    if (needed > budget_bytes())
+        throw ResourceLimit(over_budget("the surface extraction", needed,
+                                        std::to_string(grid_.size()) + " voxels in " + std::to_string(grid_.index().block_count()) +
+                                            " blocks, max level " + std::to_string(config_.max_level())));
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     Mesh mesh;
     arena.execute([&] {
@@ -89,6 +111,47 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     summary_.mesh_vertices = mesh.vertices.size();
     summary_.mesh_triangles = mesh.triangles.size();
     return mesh;
+}
+
+double Reconstructor::budget_bytes() const { return config_.max_memory_mb * 1048576.0; }
+
+std::string Reconstructor::over_budget(const std::string& what, double bytes, const std::string& detail) const {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " would need about %.0f MiB, above the memory budget of %.0f MiB (", bytes / 1048576.0,
+                  config_.max_memory_mb);
+    return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (--max-memory)";
+}
+
+std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
+                                      std::size_t limit) {
+    const std::size_t blocks = grid.index().block_count();
+    if (config.seeded_surface && evaluation == Evaluation::Fast) {
+        // Measured (docs/reliability.md): the search's visited flags and slots cost about 4 KiB per
+        // voxel block; blocks the surface runs through (3+ voxels) add the field, its samples and
+        // the welding table, about 10 KiB more. Rounded up to 5 and 12 KiB.
+        std::size_t surface_blocks = 0;
+        for (std::size_t b = 0; b < blocks; ++b) {
+            int n = 0;
+            for (const std::uint64_t w : grid.occupancy(b)) n += std::popcount(w);
+            surface_blocks += n >= 3;
+        }
+        return blocks * 5 * 1024 + surface_blocks * 12 * 1024;
+    }
+    // Every vertex within the largest level L of a voxel is a candidate, each costing its key, its
+    // sample and its share of the field (measured ~43 B; 48 B here). Candidates are bounded by the
+    // vertex blocks within ceil(L / 8) blocks of a voxel block, counted until `limit` is passed.
+    constexpr std::size_t kPerBlock = BlockMap<int>::kVolume * 48;
+    const int r = (config.max_level() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize;
+    BlockIndex dilated;
+    std::size_t count = 0;
+    for (const VoxelKey& key : grid.index().block_keys())
+        for (int z = -r; z <= r; ++z)
+            for (int y = -r; y <= r; ++y)
+                for (int x = -r; x <= r; ++x) {
+                    if (!dilated.try_emplace(VoxelKey(key.x() + x, key.y() + y, key.z() + z), 0).second) continue;
+                    if (++count * kPerBlock > limit) return count * kPerBlock;
+                }
+    return count * kPerBlock;
 }
 
 Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const ReconstructionConfig& config,

@@ -1,6 +1,7 @@
 #pragma once
 // The reconstruction pipeline (Sec. III): points -> voxel statistics -> adaptive TSDF ->
 // marching cubes. Composes the modules; holds the voxel grid so more scans can be integrated.
+#include <cstdint>
 #include <span>
 #include <string>
 
@@ -21,6 +22,7 @@ struct ReconstructionSummary {
     std::size_t defined_vertices = 0;
     std::size_t mesh_vertices = 0;
     std::size_t mesh_triangles = 0;
+    std::size_t memory_estimate = 0;  ///< bytes: the grid plus estimate_extraction_bytes (the budget check)
     double seconds_insert = 0, seconds_tsdf = 0, seconds_mesh = 0;
 
     /// One line: counts and per-stage times.
@@ -39,11 +41,14 @@ public:
     Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor);
 
     /// Adds the finite points of `cloud` to the voxel statistics; counts the others as dropped.
+    /// Throws ResourceLimit (with an estimate) when the grid outgrows config.max_memory_mb; the
+    /// points integrated before the throw stay in the grid.
     void integrate(const PointCloud& cloud);
     /// The same on a view (no copy): used by the Python bindings on numpy arrays.
     void integrate(std::span<const Eigen::Vector3d> points);
 
-    /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated.
+    /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated and
+    /// ResourceLimit if the grid plus estimate_extraction_bytes exceeds config.max_memory_mb.
     Mesh extract_mesh(Evaluation evaluation = Evaluation::Fast);
 
     const ReconstructionSummary& summary() const { return summary_; }
@@ -51,11 +56,20 @@ public:
     const ReconstructionConfig& config() const { return config_; }
 
 private:
+    double budget_bytes() const;
+    std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;
+
     ReconstructionConfig config_;
     Eigen::Vector3d sensor_;
     VoxelGrid grid_;
     ReconstructionSummary summary_;
 };
+
+/// Estimated peak bytes extract_mesh allocates on top of `grid` (search or candidate lists, TSDF
+/// field, welding tables), from the grid's blocks. Calibrated against peak RSS in
+/// docs/reliability.md; errs on the high side. Counting stops once the estimate passes `limit`.
+std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
+                                      std::size_t limit = SIZE_MAX);
 
 /// One-shot helper: integrate `cloud` and extract the mesh.
 Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const ReconstructionConfig& config,

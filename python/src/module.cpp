@@ -105,12 +105,15 @@ PYBIND11_MODULE(_lidarsurf, m) {
     m.doc() = "lidarsurf: surface reconstruction from lidar scans (Roldao et al., ITSC 2019).";
     m.attr("__version__") = LIDARSURF_VERSION_STRING;
 
-    // Exceptions: bad parameters or data -> ValueError, files -> OSError, with the C++ message.
+    // Exceptions: bad parameters or data -> ValueError, files -> OSError, over the memory budget
+    // -> MemoryError, with the C++ message.
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
         } catch (const IoError& e) {
             PyErr_SetString(PyExc_OSError, e.what());
+        } catch (const ResourceLimit& e) {
+            PyErr_SetString(PyExc_MemoryError, e.what());
         } catch (const Error& e) {
             PyErr_SetString(PyExc_ValueError, e.what());
         }
@@ -136,6 +139,8 @@ PYBIND11_MODULE(_lidarsurf, m) {
                        "Keep only the surface connected to the data (False: every cube with defined corners).")
         .def_readwrite("seed_dilation", &ReconstructionConfig::seed_dilation, "Seed cubes within this many cubes of an occupied voxel.")
         .def_readwrite("threads", &ReconstructionConfig::threads, "Worker threads; 0 = all cores.")
+        .def_readwrite("max_memory_mb", &ReconstructionConfig::max_memory_mb,
+                       "Memory budget in MiB; a reconstruction estimated to need more raises MemoryError.")
         .def("validate", &ReconstructionConfig::validate, "Raise ValueError naming the first bad field.")
         .def("__repr__", [](const ReconstructionConfig& c) {
             std::ostringstream o;

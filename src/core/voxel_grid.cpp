@@ -61,6 +61,11 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     ++points_;
 }
 
+std::size_t VoxelGrid::memory_bytes() const {
+    return index_.memory_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
+           keys_.capacity() * sizeof(VoxelKey);
+}
+
 const VoxelStats* VoxelGrid::find(const VoxelKey& key) const {
     const std::int32_t* slot = index_.find(key);
     return slot && *slot >= 0 ? &stats_[static_cast<std::size_t>(*slot)] : nullptr;

@@ -25,7 +25,10 @@ std::size_t KittiSequence::frame_count() const {
 }
 
 std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path) {
-    const std::string data = detail::read_file(path.string());
+    return parse_poses(detail::read_file(path.string()), path.string());
+}
+
+std::vector<Eigen::Isometry3d> parse_poses(std::string_view data, const std::string& name) {
     std::string_view rest = data;
     std::vector<Eigen::Isometry3d> poses;
     std::size_t line_no = 0;
@@ -38,18 +41,18 @@ std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path) {
         int n = 0;
         while (tk.next(tok)) {
             if (n == 12 || !detail::parse_double(tok, v[n]) || !std::isfinite(v[n]))
-                throw FormatError(path.string() + ": line " + std::to_string(line_no) + ": expected 12 finite numbers");
+                throw FormatError(name + ": line " + std::to_string(line_no) + ": expected 12 finite numbers");
             ++n;
         }
         if (n == 0) continue;  // blank line
-        if (n != 12) throw FormatError(path.string() + ": line " + std::to_string(line_no) + ": expected 12 numbers, got " + std::to_string(n));
+        if (n != 12) throw FormatError(name + ": line " + std::to_string(line_no) + ": expected 12 numbers, got " + std::to_string(n));
         Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
         for (int r = 0; r < 3; ++r) {
             for (int c = 0; c < 3; ++c) pose.linear()(r, c) = v[4 * r + c];
             pose.translation()[r] = v[4 * r + 3];
         }
         if (!(pose.linear().transpose() * pose.linear()).isApprox(Eigen::Matrix3d::Identity(), 1e-3))
-            throw FormatError(path.string() + ": line " + std::to_string(line_no) + ": the rotation is not orthonormal");
+            throw FormatError(name + ": line " + std::to_string(line_no) + ": the rotation is not orthonormal");
         poses.push_back(pose);
     }
     return poses;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <iomanip>
 #include <string>
@@ -107,9 +108,13 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat 
 
 Mesh read_mesh(const std::filesystem::path& path) {
     const std::string name = path.string();
-    const std::string data = detail::read_file(name);
+    const bool obj = detail::lower(path.extension().string()) == ".obj";
+    return parse_mesh(detail::read_file(name), obj ? MeshFormat::Obj : MeshFormat::PlyBinary, name);
+}
+
+Mesh parse_mesh(std::string_view data, MeshFormat format, const std::string& name) {
     Mesh mesh;
-    if (detail::lower(path.extension().string()) != ".obj") {
+    if (format != MeshFormat::Obj) {
         auto content = detail::parse_ply(data, name, true);
         mesh.vertices = std::move(content.vertices);
         mesh.triangles = std::move(content.triangles);
@@ -133,7 +138,7 @@ Mesh read_mesh(const std::filesystem::path& path) {
             std::vector<std::uint32_t> idx;
             while (tk.next(tok)) {
                 double v;
-                if (!detail::parse_double(tok.substr(0, tok.find('/')), v) || v == 0 || v != static_cast<long long>(v))
+                if (!detail::parse_double(tok.substr(0, tok.find('/')), v) || v == 0 || v != std::floor(v) || std::fabs(v) > 4e9)
                     throw FormatError(name + ": line " + std::to_string(line_no) + ": bad face index");
                 const double i = v > 0 ? v - 1 : static_cast<double>(mesh.vertices.size()) + v;
                 if (i < 0 || i >= static_cast<double>(mesh.vertices.size())) throw FormatError(name + ": line " + std::to_string(line_no) + ": face index out of range");

@@ -48,6 +48,8 @@ void ReconstructionConfig::validate() const {
         fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + std::to_string(truncation_voxels) + ")");
     if (seed_dilation < 0 || seed_dilation > kMaxNeighbourhoodLevel)
         fail("seed dilation must be in [0, " + std::to_string(kMaxNeighbourhoodLevel) + "] (got " + std::to_string(seed_dilation) + ")");
+    if (!std::isfinite(max_memory_mb) || max_memory_mb < 1 || max_memory_mb > 1e9)
+        fail("max memory must be within [1, 1e9] MiB (got " + std::to_string(max_memory_mb) + ")");
     if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
 }
 

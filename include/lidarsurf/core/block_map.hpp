@@ -25,6 +25,9 @@ class BlockIndex {
 public:
     static constexpr std::uint32_t kAbsent = 0xffffffffu;
 
+    /// Bytes held by the table.
+    std::size_t memory_bytes() const { return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(std::uint32_t); }
+
     std::uint32_t find(const VoxelKey& key) const {
         if (keys_.empty()) return kAbsent;
         const std::uint64_t packed = pack_key(key);
@@ -126,6 +129,11 @@ public:
     T& operator[](const VoxelKey& key) { return block(block_of(key))[static_cast<std::size_t>(offset_of(key))]; }
 
     std::size_t block_count() const { return blocks_.size(); }
+    /// Bytes held by the map: the blocks (with a heap header each), their pointers, keys and index.
+    std::size_t memory_bytes() const {
+        return blocks_.size() * (sizeof(Block) + 16) + blocks_.capacity() * sizeof(void*) +
+               block_keys_.capacity() * sizeof(VoxelKey) + index_.memory_bytes();
+    }
     /// Block keys in creation order; block i of block_at(i).
     const std::vector<VoxelKey>& block_keys() const { return block_keys_; }
     const Block& block_at(std::size_t i) const { return *blocks_[i]; }

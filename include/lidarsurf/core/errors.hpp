@@ -30,6 +30,13 @@ public:
     using Error::Error;
 };
 
+/// The work would exceed a resource budget (ReconstructionConfig::max_memory_mb). The message
+/// carries the estimate, so the user can raise the budget or coarsen the voxel size.
+class ResourceLimit : public Error {
+public:
+    using Error::Error;
+};
+
 /// The operating system refused a file operation (missing, unreadable, not writable).
 class IoError : public Error {
 public:

@@ -57,6 +57,9 @@ public:
     Eigen::Vector3d to_local(const Eigen::Vector3d& world) const { return world - origin_; }
     Eigen::Vector3d to_world(const Eigen::Vector3d& local) const { return local + origin_; }
 
+    /// Bytes held by the grid: index blocks, occupancy words, statistics and keys (capacities).
+    std::size_t memory_bytes() const;
+
     /// Voxel index blocks: slot = index into stats()/keys(), -1 = empty voxel.
     const BlockMap<std::int32_t>& index() const { return index_; }
 

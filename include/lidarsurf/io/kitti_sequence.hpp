@@ -9,6 +9,7 @@
 //   sensor.json               the sensor that made the scans
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -34,6 +35,8 @@ struct KittiSequence {
 /// Reads a KITTI poses file. Throws IoError if unreadable and FormatError (with the line number)
 /// for a line that is not 12 finite numbers or whose rotation is not orthonormal (1e-3).
 std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path);
+/// The same on an in-memory buffer (used by read_poses and by the fuzzers). `name` is for messages.
+std::vector<Eigen::Isometry3d> parse_poses(std::string_view data, const std::string& name);
 
 /// Writes a KITTI poses file atomically (full double precision).
 void write_poses(const std::vector<Eigen::Isometry3d>& poses, const std::filesystem::path& path);

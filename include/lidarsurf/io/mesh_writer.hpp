@@ -3,6 +3,7 @@
 // the per-vertex normal, level k' (uchar "level") and confidence (float "confidence").
 #include <filesystem>
 #include <ostream>
+#include <string>
 #include <string_view>
 
 #include "lidarsurf/mesh/mesh.hpp"
@@ -23,5 +24,8 @@ void write_obj(const Mesh& mesh, std::ostream& out);
 
 /// Reads a triangle mesh written as PLY (vertex x, y, z and a face list) or OBJ (v and f lines).
 Mesh read_mesh(const std::filesystem::path& path);
+/// The same on an in-memory buffer: OBJ if `format` is Obj, else PLY (any PLY encoding). `name` is
+/// for messages. Used by read_mesh and by the fuzzers.
+Mesh parse_mesh(std::string_view data, MeshFormat format, const std::string& name);
 
 }  // namespace lidarsurf

@@ -47,6 +47,9 @@ struct ReconstructionConfig {
     /// Seeds of that search: the cubes within this many cubes of an occupied voxel.
     int seed_dilation = 0;
     int threads = 0;           ///< Worker threads; 0 = all cores.
+    /// Memory budget in MiB: the reconstruction refuses (ResourceLimit, with its estimate) a cloud
+    /// whose voxel grid and TSDF would need more (docs/reliability.md, "Memory budget").
+    double max_memory_mb = 4096;
 
     /// The truncation in metres (truncation_voxels * voxel_size), infinity when disabled.
     double truncation_distance() const { return truncation_distance_of(truncation_voxels, voxel_size); }

@@ -1,0 +1,103 @@
+// libFuzzer harness for the whole reconstruction: a small fuzzed cloud with fuzzed parameters
+// through the fast path, the reference path and IMLS. Each either throws a lidarsurf::Error or
+// returns a mesh whose vertices are finite, whose faces refer to existing vertices, and whose
+// vertices lie within the data's bounding box grown by the largest neighbourhood (a vertex of
+// the lattice is only defined if H^k(v) holds points, Sec. III-B).
+#include <cstring>
+#include <vector>
+
+#include "fuzz_common.hpp"
+#include "lidarsurf/baselines/imls.hpp"
+#include "lidarsurf/pipeline.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+
+class Bytes {
+public:
+    Bytes(const std::uint8_t* d, std::size_t n) : d_(d), n_(n) {}
+    std::uint8_t u8() { return pos_ < n_ ? d_[pos_++] : 0; }
+    double unit() { return u8() / 255.0; }
+    bool take(void* out, std::size_t k) {
+        if (n_ - pos_ < k) return false;
+        std::memcpy(out, d_ + pos_, k);
+        pos_ += k;
+        return true;
+    }
+
+private:
+    const std::uint8_t* d_;
+    std::size_t n_, pos_ = 0;
+};
+
+void check_mesh(const Mesh& mesh, const std::vector<Eigen::Vector3d>& points, double reach) {
+    Eigen::AlignedBox3d box;
+    for (const auto& p : points)
+        if (p.allFinite()) box.extend(p);
+    for (const auto& v : mesh.vertices) {
+        fuzz::require(v.allFinite(), "non-finite mesh vertex");
+        fuzz::require(box.exteriorDistance(v) <= reach, "mesh vertex far from the data");
+    }
+    for (const auto& t : mesh.triangles)
+        for (auto i : t) fuzz::require(i < mesh.vertices.size(), "triangle index out of range");
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    Bytes in(data, size);
+    ReconstructionConfig c;
+    c.mode = static_cast<Mode>(in.u8() % 4);
+    c.voxel_size = 0.02 + 0.5 * in.unit();
+    c.tau = in.unit();                          // 0 must be refused
+    c.n_min = in.u8() % 16;                     // < 3 must be refused
+    c.k_max = in.u8() % 9;                      // 0 must be refused
+    c.k = 1 + in.u8() % 8;
+    c.min_planarity = in.unit() * 0.5;
+    const std::uint8_t t = in.u8();
+    c.truncation_voxels = (t & 3) == 0 ? 0.0 : 0.5 + t / 64.0;  // < sqrt(3)/2 must be refused
+    c.seeded_surface = in.u8() & 1;
+    c.seed_dilation = in.u8() % 3;
+    c.threads = 1 + in.u8() % 2;
+    const std::uint8_t flags = in.u8();
+    const Eigen::Vector3d sensor(static_cast<std::int8_t>(in.u8()) * 0.1, static_cast<std::int8_t>(in.u8()) * 0.1,
+                                 static_cast<std::int8_t>(in.u8()) * 0.1);
+    const Eigen::Vector3d offset = (flags & 4) ? Eigen::Vector3d(4.0e6, -3.0e6, 1.0e3) : Eigen::Vector3d::Zero();
+
+    // Points: int16 triplets in 1/128 m (a +-256 m box), or raw float32 triplets (NaN, Inf, 1e30).
+    std::vector<Eigen::Vector3d> points;
+    while (points.size() < 3000) {
+        if (flags & 1) {
+            float f[3];
+            if (!in.take(f, sizeof f)) break;
+            points.emplace_back(f[0], f[1], f[2]);
+        } else {
+            std::int16_t q[3];
+            if (!in.take(q, sizeof q)) break;
+            points.push_back(offset + Eigen::Vector3d(q[0], q[1], q[2]) / 128.0);
+        }
+    }
+    PointCloud cloud;
+    cloud.points = points;
+    const double reach = (c.max_level() + 2) * c.voxel_size * 1.7320508075688772;
+
+    for (const Evaluation e : {Evaluation::Fast, Evaluation::Reference}) {
+        fuzz::expect_typed([&] {
+            Reconstructor r(c, offset + sensor);
+            r.integrate(cloud);
+            const Mesh mesh = r.extract_mesh(e);
+            check_mesh(mesh, points, reach);
+            fuzz::require(r.summary().points_read == points.size(), "points_read");
+        });
+    }
+    if (flags & 2) {
+        fuzz::expect_typed([&] {
+            ImlsConfig ic = ImlsConfig::matching(c);
+            ic.threads = c.threads;
+            const Mesh mesh = reconstruct_imls(cloud, offset + sensor, ic);
+            check_mesh(mesh, points, ic.radius + 2 * ic.voxel_size);
+        });
+    }
+    return 0;
+}

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Writes the fuzzers' seed corpus (fuzz/corpus/<harness>/): a few small valid files per format,
+so libFuzzer starts from the shapes real files have. Deterministic; rerun after a format change."""
+import math
+import os
+import struct
+import sys
+
+root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corpus")
+PTS = [(1.0 + 0.1 * i, -2.0 + 0.05 * i, 0.3 * math.sin(i)) for i in range(6)]
+
+
+def put(harness, name, data):
+    d = os.path.join(root, harness)
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data if isinstance(data, bytes) else data.encode())
+
+
+def lzf_literal(raw):
+    """LZF stream made of literal runs only (control byte < 32 = run of ctrl + 1 bytes)."""
+    out = b""
+    for i in range(0, len(raw), 32):
+        chunk = raw[i:i + 32]
+        out += bytes([len(chunk) - 1]) + chunk
+    return out
+
+
+# KITTI .bin: the harness's first byte picks fields = 3 + byte % 6 (1 -> 4, 2 -> 5).
+for fields, tag in ((4, b"\x01"), (5, b"\x02")):
+    put("fuzz_kitti_bin", f"f{fields}.bin", tag + b"".join(struct.pack("<" + "f" * fields, *p, *([7.0] * (fields - 3))) for p in PTS))
+
+# PLY points: ascii, binary little and big endian, with extra properties.
+hdr = "ply\nformat {} 1.0\ncomment seed\nelement vertex {}\nproperty float x\nproperty float y\nproperty double z\nproperty uchar level\nend_header\n"
+put("fuzz_ply_points", "ascii.ply", hdr.format("ascii", len(PTS)) + "".join(f"{x} {y} {z} 3\n" for x, y, z in PTS))
+for fmt, e in (("binary_little_endian", "<"), ("binary_big_endian", ">")):
+    put("fuzz_ply_points", fmt + ".ply", hdr.format(fmt, len(PTS)).encode() + b"".join(struct.pack(e + "ffdB", *p, 3) for p in PTS))
+
+# PCD: ascii, binary and binary_compressed (fields stored one after another, then LZF).
+def pcd_header(data):
+    n = len(PTS)
+    return (f"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+            f"WIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n").encode()
+put("fuzz_pcd_points", "ascii.pcd", pcd_header("ascii") + "".join(f"{x} {y} {z} 5\n" for x, y, z in PTS).encode())
+put("fuzz_pcd_points", "binary.pcd", pcd_header("binary") + b"".join(struct.pack("<4f", *p, 5.0) for p in PTS))
+soa = b"".join(struct.pack("<f", p[a] if a < 3 else 5.0) for a in range(4) for p in PTS)
+packed = lzf_literal(soa)
+put("fuzz_pcd_points", "compressed.pcd", pcd_header("binary_compressed") + struct.pack("<II", len(packed), len(soa)) + packed)
+
+# XYZ / CSV text.
+put("fuzz_text_points", "points.xyz", "".join(f"{x} {y} {z}\n" for x, y, z in PTS))
+put("fuzz_text_points", "points.csv", "x,y,z,intensity\n" + "".join(f"{x},{y},{z},1\n" for x, y, z in PTS))
+
+# KITTI poses: identity, then a yaw of 30 degrees with a translation.
+c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)
+put("fuzz_poses", "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n" + f"{c} {-s} 0 1.5 {s} {c} 0 -2 0 0 1 0.25\n")
+
+# Meshes: the harness's first byte picks PLY (even) or OBJ (odd).
+tet_v = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+tet_f = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+mh = "ply\nformat {} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+put("fuzz_mesh_reader", "ascii.ply", "\x00" + mh.format("ascii") + "".join(f"{x} {y} {z}\n" for x, y, z in tet_v)
+    + "".join(f"3 {a} {b} {c}\n" for a, b, c in tet_f))
+put("fuzz_mesh_reader", "binary.ply", b"\x00" + mh.format("binary_little_endian").encode()
+    + b"".join(struct.pack("<3f", *v) for v in tet_v) + b"".join(struct.pack("<B3i", 3, *f) for f in tet_f))
+put("fuzz_mesh_reader", "quad.obj", "\x01# seed\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in tet_v) + "f 1 2 3 4\nf -1/1 -2/2 -3/3\n")
+
+# Sensor JSON.
+put("fuzz_sensor_json", "beams.json", '{"name": "s", "beams": 8, "elevation_max_deg": 5, "elevation_min_deg": -20, "azimuth_step_deg": 1}')
+put("fuzz_sensor_json", "elevations.json", '{"elevations_deg": [2, 0, -2.5], "min_range": 1, "max_range": 80, "range_noise": 0.02, "dropout": 0.1}')
+
+# Whole reconstruction: 12 parameter bytes (see fuzz_reconstruct.cpp), 3 sensor bytes, then int16
+# points in 1/128 m. A noisy plane seen from above, and a box corner (three planes).
+def recon(flags, pts):
+    params = bytes([0, 90, 50, 10, 5, 3, 25, 109, 1, 0, 0, flags, 0, 0, 20])
+    return params + b"".join(struct.pack("<3h", *(int(round(128 * c)) for c in p)) for p in pts)
+plane = [(0.07 * i, 0.07 * j, 0.01 * math.sin(i * j)) for i in range(25) for j in range(25)]
+corner = [q for i in range(18) for j in range(18) for q in ((0.08 * i, 0.08 * j, 0.0), (0.08 * i, 0.0, 0.08 * j), (0.0, 0.08 * i, 0.08 * j))]
+put("fuzz_reconstruct", "plane", recon(0, plane))
+put("fuzz_reconstruct", "corner_imls", recon(2, corner))
+put("fuzz_reconstruct", "corner_far", recon(4, corner))
+print("corpus written to", root, file=sys.stderr)
