@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         const int fields = 3 + static_cast<unsigned char>(in.front()) % 6;
         in.remove_prefix(1);
         const PointCloud cloud = parse_kitti_bin(in, fields, "fuzz.bin");
-        fuzz::require(cloud.size() * 4u * static_cast<unsigned>(fields) == in.size(), "bin: points * record != size");
+        fuzz::require(cloud.points.size() * 4u * static_cast<unsigned>(fields) == in.size(), "bin: points * record != size");
 #elif LIDARSURF_FUZZ_FORMAT == 1
         const PointCloud cloud = parse_ply_points(in, "fuzz.ply");
 #elif LIDARSURF_FUZZ_FORMAT == 2
@@ -24,7 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 #endif
         // No allocation beyond what the bytes can hold: a point costs at least one byte, or
         // (LZF-compressed PCD) at most ~100 bytes expanded from one compressed byte.
-        fuzz::require(cloud.size() <= 100 * size + 16, "more points than the file can hold");
+        fuzz::require(cloud.points.size() <= 100 * size + 16, "more points than the file can hold");
     });
     return 0;
 }

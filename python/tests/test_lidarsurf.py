@@ -27,6 +27,7 @@ def test_config_defaults_come_from_cpp():
     ("tau", 0.0, "tau"),
     ("k_max", 0, "k_max"),
     ("n_min", 0, "n_min"),
+    ("max_memory_mb", 0.0, "max memory"),
 ])
 def test_bad_config_raises_value_error(field, value, message, scan):
     c = lidarsurf.Config()
@@ -88,6 +89,14 @@ def test_float32_gives_a_mesh_close_to_float64(scan):
 def test_bad_points_raise_value_error(points, message):
     with pytest.raises(ValueError, match=message):
         lidarsurf.reconstruct(points)
+
+
+def test_memory_budget_raises_memory_error(scan):
+    c = lidarsurf.Config()
+    assert c.max_memory_mb == 4096
+    c.max_memory_mb = 2
+    with pytest.raises(MemoryError, match="above the memory budget of 2 MiB"):
+        lidarsurf.reconstruct(scan, config=c)
 
 
 def test_empty_cloud_raises_value_error():
