@@ -40,12 +40,17 @@ sanitize: setup
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS)
 
 # The parallel code under ThreadSanitizer (third build directory): the tests whose code runs TBB
-# loops (surface search, reference TSDF, IMLS, metrics, simulator, renderer, pipeline).
-TSAN_FILTER ?= SeededSurface.*:Pipeline.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*
+# loops (surface search, reference TSDF, IMLS, metrics, simulator, renderer, pipeline), linked
+# against Debian's oneTBB source rebuilt with TSan (scripts/build_tbb_tsan.sh: Debian's libtbb is
+# not instrumented, and TSan would report every hand-off between its threads as a race).
+# The three slowest (the same parallel code on more data, 290 s under TSan) are left out.
+TSAN_FILTER ?= SeededSurface.*:Pipeline.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*$\
+  -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo
 tsan: setup
-	cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=thread -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
+	bash scripts/build_tbb_tsan.sh $(TSAN_BUILD)/tbb
+	cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=thread -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF -DTBB_DIR=$(CURDIR)/$(TSAN_BUILD)/tbb/lib/cmake/TBB
 	cmake --build $(TSAN_BUILD) -j $(JOBS) --target lidarsurf_tests
-	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" $(TSAN_BUILD)/tests/lidarsurf_tests --gtest_filter='$(TSAN_FILTER)'
+	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/scripts/tsan.supp" $(TSAN_BUILD)/tests/lidarsurf_tests --gtest_filter='$(TSAN_FILTER)'
 
 # libFuzzer harnesses (clang, ASan+UBSan) run FUZZ_SECONDS each on fuzz/corpus/; see docs/reliability.md.
 fuzz:

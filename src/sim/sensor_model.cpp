@@ -141,9 +141,12 @@ SensorModel SensorModel::from_json(std::string_view text) {
             if (!s.elevations_deg.empty()) throw FormatError("sensor JSON: give either elevations_deg or beams, not both");
             if (!j.contains("elevation_max_deg") || !j.contains("elevation_min_deg"))
                 throw FormatError("sensor JSON: beams needs elevation_max_deg and elevation_min_deg");
-            const int beams = j.at("beams").get<int>();
-            if (beams < 1 || beams > 4096) throw InvalidArgument("sensor JSON: beams must be in [1, 4096]");
-            s.elevations_deg = even_beams(beams, j.at("elevation_max_deg").get<double>(), j.at("elevation_min_deg").get<double>());
+            // Read as a double: get<int> on 1e20 would be an out-of-range conversion (found by
+            // fuzz_sensor_json), and 8.7 beams is not a sensor.
+            const double beams = j.at("beams").get<double>();
+            if (!(beams >= 1 && beams <= 4096) || beams != std::floor(beams))
+                throw InvalidArgument("sensor JSON: beams must be a whole number in [1, 4096]");
+            s.elevations_deg = even_beams(static_cast<int>(beams), j.at("elevation_max_deg").get<double>(), j.at("elevation_min_deg").get<double>());
         }
     } catch (const nlohmann::json::exception& e) {
         throw FormatError(std::string("sensor JSON: ") + e.what());

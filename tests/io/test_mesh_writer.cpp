@@ -64,3 +64,18 @@ TEST(MeshWriter, FailureLeavesPreviousOutputIntact) {
 }
 
 }  // namespace
+
+TEST(MeshReader, MalformedObjAndPlyFacesAreFormatErrors) {
+    const std::string v3 = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    // A face index of 1e300 was an out-of-range double -> long long conversion (UB) before the
+    // check; found reviewing the parser for fuzz_mesh_reader.
+    EXPECT_THROW(parse_mesh(v3 + "f 1e300 1 2\n", MeshFormat::Obj, "huge"), FormatError);
+    EXPECT_THROW(parse_mesh(v3 + "f 1 2 4\n", MeshFormat::Obj, "range"), FormatError);
+    EXPECT_THROW(parse_mesh(v3 + "f 1 2.5 3\n", MeshFormat::Obj, "fraction"), FormatError);
+    EXPECT_EQ(parse_mesh(v3 + "f -3 -2 -1\n", MeshFormat::Obj, "relative").triangles.size(), 1u);
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                            "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    EXPECT_EQ(parse_mesh(ply + "3 0 1 2\n", MeshFormat::PlyBinary, "ok").triangles.size(), 1u);
+    EXPECT_THROW(parse_mesh(ply + "3 0 1 3\n", MeshFormat::PlyBinary, "range"), FormatError);
+    EXPECT_THROW(parse_mesh(ply + "3 0 1 -1\n", MeshFormat::PlyBinary, "negative"), FormatError);
+}

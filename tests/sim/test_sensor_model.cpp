@@ -60,6 +60,13 @@ TEST(SensorModel, JsonRoundTripAndErrors) {
     EXPECT_THROW(SensorModel::from_json(R"({"elevations_deg": [0], "range_noise": -1})"), InvalidArgument);
     EXPECT_THROW(SensorModel::from_json(R"({"elevations_deg": [0], "azimuth_step_deg": 0})"), InvalidArgument);
     EXPECT_THROW(SensorModel::from_json(R"({"elevations_deg": []})"), InvalidArgument);
+    // Fuzzer regressions: a beam count beyond int (was an out-of-range conversion under UBSan;
+    // the second input is fuzz_sensor_json's own crash), and a fractional one (was truncated).
+    EXPECT_THROW(SensorModel::from_json(R"({"beams": 1e20, "elevation_max_deg": 5, "elevation_min_deg": -20})"), InvalidArgument);
+    EXPECT_THROW(SensorModel::from_json(R"({"name": "s", "beams":68888888888888888888888888888888888888888888888888888888888888888888883,)"
+                                        R"( "elevation_max_deg": 5, "elevation_min_deg": 5})"),
+                 InvalidArgument);
+    EXPECT_THROW(SensorModel::from_json(R"({"beams": 8.7, "elevation_max_deg": 5, "elevation_min_deg": -20})"), InvalidArgument);
 }
 
 // A wall 10 m ahead seen by one horizontal beam: the range residuals have the sensor's sigma and
