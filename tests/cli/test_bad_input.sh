@@ -7,21 +7,7 @@ set -u
 cli="$1"
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
-fail=0 passed=0
-expect() {  # expect CODE PATTERN -- command...
-    local code=$1 pattern=$2; shift 3
-    local out rc
-    out=$("$@" 2>&1); rc=$?
-    if [ "$rc" -ne "$code" ] || ! grep -qiE "$pattern" <<<"$out"; then
-        echo "FAIL: '$*' exited $rc (want $code), output: $out"; fail=$((fail + 1))
-    else
-        passed=$((passed + 1))
-    fi
-}
-check() {  # check DESCRIPTION -- command...
-    local what=$1; shift 2
-    if "$@"; then passed=$((passed + 1)); else echo "FAIL: $what"; fail=$((fail + 1)); fi
-}
+source "$(dirname "$0")/expect.sh"
 r() { "$cli" reconstruct "$@"; }
 "$cli" simulate --scene demo -o "$dir/scan.bin" >/dev/null || { echo "simulate failed"; exit 1; }
 out="$dir/out.ply"

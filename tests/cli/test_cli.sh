@@ -1,20 +1,11 @@
 #!/usr/bin/env bash
-# Exit codes and messages of the CLI: 0 ok, 2 bad arguments, 3 bad data, 4 file system.
+# Exit codes and messages of the CLI: 0 ok, 2 bad arguments, 3 bad data, 4 file system (the bad-input
+# matrix is tests/cli/test_bad_input.sh).
 set -u
 cli="$1"
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
-fail=0 passed=0
-expect() {  # expect CODE PATTERN -- command...
-    local code=$1 pattern=$2; shift 3
-    local out rc
-    out=$("$@" 2>&1); rc=$?
-    if [ "$rc" -ne "$code" ] || ! grep -qiE "$pattern" <<<"$out"; then
-        echo "FAIL: '$*' exited $rc (want $code), output: $out"; fail=$((fail + 1))
-    else
-        passed=$((passed + 1))
-    fi
-}
+source "$(dirname "$0")/expect.sh"
 "$cli" simulate --scene demo -o "$dir/scan.bin" --gt "$dir/gt.bin" >/dev/null || { echo "simulate failed"; exit 1; }
 expect 0 "triangles" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply"
 [ -s "$dir/mesh.ply" ] || { echo "FAIL: no mesh written"; fail=$((fail + 1)); }
