@@ -46,7 +46,8 @@ sanitize: setup
 # The three slowest (the same parallel code on more data, 290 s under TSan) are left out.
 TSAN_FILTER ?= SeededSurface.*:Pipeline.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo
-tsan: setup
+tsan:
+	@bash scripts/setup.sh tsan
 	bash scripts/build_tbb_tsan.sh $(TSAN_BUILD)/tbb
 	cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=thread -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF -DTBB_DIR=$(CURDIR)/$(TSAN_BUILD)/tbb/lib/cmake/TBB
 	cmake --build $(TSAN_BUILD) -j $(JOBS) --target lidarsurf_tests

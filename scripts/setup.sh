@@ -19,8 +19,10 @@ PKGS=(
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
 )
-# `setup.sh fuzz`: also clang and its libFuzzer runtime (make fuzz).
+# `setup.sh fuzz`: also clang and its libFuzzer runtime (make fuzz); `setup.sh tsan`: the tools
+# that fetch and check Debian's oneTBB source (make tsan, scripts/build_tbb_tsan.sh).
 if [ "${1:-}" = "fuzz" ]; then PKGS+=(clang libclang-rt-14-dev); fi
+if [ "${1:-}" = "tsan" ]; then PKGS+=(curl xz-utils ca-certificates); fi
 
 missing=()
 for p in "${PKGS[@]}"; do
