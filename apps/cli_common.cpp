@@ -33,10 +33,11 @@ Eigen::Vector3d parse_vec3(const std::string& text, const char* what) {
     return v;
 }
 
-void refuse_overwriting_input(const fs::path& input, const fs::path& output) {
+void check_output(const fs::path& input, const fs::path& output) {
     std::error_code ec;
     if (fs::exists(output, ec) && fs::equivalent(input, output, ec))
         throw InvalidArgument("output '" + output.string() + "' is the input file; refusing to overwrite it");
+    AtomicFile probe(output);  // throws IoError now rather than after the work; never committed
 }
 
 // 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget.

@@ -16,9 +16,10 @@ namespace lidarsurf::cli {
 
 /// "x,y,z" -> vector; InvalidArgument naming `what` otherwise.
 Eigen::Vector3d parse_vec3(const std::string& text, const char* what);
-/// InvalidArgument if `output` exists and is the same file as `input`.
-void refuse_overwriting_input(const std::filesystem::path& input, const std::filesystem::path& output);
-/// 2: the user's arguments; 3: the data; 4: the file system; 1: anything else.
+/// Before any work: InvalidArgument if `output` exists and is the same file as `input`; IoError if
+/// `output` cannot be written (probed with a temporary beside it, removed at once).
+void check_output(const std::filesystem::path& input, const std::filesystem::path& output);
+/// 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget; 1: anything else.
 int exit_code(const Error& e);
 
 /// Options shared by `reconstruct`, `evaluate --holdout` and `benchmark`.

@@ -42,7 +42,7 @@ int run_reconstruct(const std::string& input, const std::string& output, const s
                     const ReconstructOptions& o) {
     const Method m = resolve_method(o);
     const MeshFormat mesh_format = parse_mesh_format(mesh_format_name);
-    refuse_overwriting_input(input, output);
+    check_output(input, output);
 
     auto t0 = std::chrono::steady_clock::now();
     const PointCloud cloud = read_points(input, m.read);
@@ -87,7 +87,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     ec.seed = o.seed;
     if (!std::isfinite(o.gt_spacing) || o.gt_spacing <= 0) throw InvalidArgument("--gt-spacing must be finite and > 0");
     for (const std::string& in : o.inputs)
-        if (!o.json.empty()) refuse_overwriting_input(in, o.json);
+        if (!o.json.empty()) check_output(in, o.json);
     Mesh mesh;
     std::vector<Eigen::Vector3d> gt;
     std::string header;
@@ -97,7 +97,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
         ec.origin = m.sensor;
         ec.threads = m.config.threads;
         ec.validate();
-        if (!o.mesh_out.empty()) refuse_overwriting_input(o.inputs[0], o.mesh_out);
+        if (!o.mesh_out.empty()) check_output(o.inputs[0], o.mesh_out);
         PointCloud cloud = read_points(o.inputs[0], m.read);
         const std::size_t dropped = drop_non_finite(cloud);
         const HoldoutSplit split = split_holdout(cloud, o.holdout, o.seed);

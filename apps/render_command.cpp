@@ -35,7 +35,7 @@ int run_render(const RenderOptions& o) {
     if (!o.target.empty()) cfg.target = parse_vec3(o.target, "--target");
     cfg.validate();
     if (extension_of(o.output) != ".png") throw InvalidArgument("render writes PNG: give -o a .png file");
-    refuse_overwriting_input(o.input, o.output);
+    check_output(o.input, o.output);
     const auto t0 = std::chrono::steady_clock::now();
     const Mesh mesh = read_mesh(o.input);
     const Image img = viz::render(mesh, cfg);

@@ -85,6 +85,8 @@ expect 0 "triangles" -- r "$dir/scan.bin" -o "$out" --max-memory 400
 # --- Outputs (exit 4: not writable; 2: would overwrite the input).
 expect 4 "cannot write" -- r "$dir/scan.bin" -o "$dir/nodir/x.ply"
 expect 4 "cannot write|directory" -- r "$dir/scan.bin" -o "$dir"
+# The output is checked before the input is read: an unwritable output wins over bad data.
+expect 4 "cannot write" -- r "$dir/nan.xyz" -o "$dir/nodir/x.ply"
 expect 2 "refusing" -- r "$dir/scan.bin" -o "$dir/scan.bin"
 ln -s "$dir/scan.bin" "$dir/link.ply"
 expect 2 "refusing" -- r "$dir/scan.bin" -o "$dir/link.ply"
