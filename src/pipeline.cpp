@@ -74,9 +74,8 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
                                                      : "the input has no finite point (all " + std::to_string(summary_.points_read) + " dropped)");
     const auto budget = static_cast<std::size_t>(budget_bytes());
     summary_.memory_estimate = grid_.memory_bytes() + estimate_extraction_bytes(grid_, config_, evaluation, budget);
-    const double needed = static_cast<double>(summary_.memory_estimate);
-    if (needed > budget_bytes())
-        throw ResourceLimit(over_budget("the surface extraction", needed,
+    if (summary_.memory_estimate > budget)
+        throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
                                         std::to_string(grid_.size()) + " voxels in " + std::to_string(grid_.index().block_count()) +
                                             " blocks, max level " + std::to_string(config_.max_level())));
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
@@ -119,7 +118,7 @@ std::string Reconstructor::over_budget(const std::string& what, double bytes, co
     char buf[160];
     std::snprintf(buf, sizeof buf, " would need about %.0f MiB, above the memory budget of %.0f MiB (", bytes / 1048576.0,
                   config_.max_memory_mb);
-    return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (--max-memory)";
+    return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (max_memory_mb, CLI --max-memory)";
 }
 
 std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,

@@ -14,9 +14,7 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/point_reader.hpp"
 #include "lidarsurf/pipeline.hpp"
-#include "lidarsurf/sim/analytic_scene.hpp"
-#include "lidarsurf/sim/sensor_model.hpp"
-#include "lidarsurf/sim/simulator.hpp"
+#include "test_scans.hpp"
 #include "test_util.hpp"
 
 using namespace lidarsurf;
@@ -68,10 +66,7 @@ struct FileRow {
     const char* words;  // a fragment of the expected message
 };
 
-const PointCloud& demo_scan() {
-    static const PointCloud cloud = sim::simulate_scan(sim::AnalyticScene::demo(), sim::SensorModel::hdl64(), Eigen::Vector3d::Zero(), 1);
-    return cloud;
-}
+using test::demo_scan;
 
 }  // namespace
 
@@ -115,7 +110,7 @@ TEST(BadInput, ParametersOutOfRangeAreRefused) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const std::vector<std::pair<const char*, std::function<void(ReconstructionConfig&)>>> rows = {
         {"voxel size", [](auto& c) { c.voxel_size = 0; }},
-        {"voxel size", [](auto& c) { c.voxel_size = -0.2; }},
+        {"voxel size", [](auto& c) { c.voxel_size = -1; }},
         {"voxel size", [nan](auto& c) { c.voxel_size = nan; }},
         {"voxel size", [](auto& c) { c.voxel_size = 1e-9; }},
         {"tau", [](auto& c) { c.tau = 0; }},

@@ -13,6 +13,7 @@
 #include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
+#include "test_scans.hpp"
 #include "test_util.hpp"
 
 using namespace lidarsurf;
@@ -34,10 +35,7 @@ Errors vertex_errors(const Mesh& mesh, const sim::AnalyticScene& scene, const Ei
     return e;
 }
 
-const PointCloud& demo_scan() {
-    static const PointCloud cloud = sim::simulate_scan(sim::AnalyticScene::demo(), sim::SensorModel::hdl64(), Eigen::Vector3d::Zero(), 1);
-    return cloud;
-}
+using test::demo_scan;
 
 TEST(Pipeline, GroundBoxAndCylinderAreReconstructedAccurately) {
     // The scene: a ground plane, a box and a cylinder, HDL-64E with 2 cm range noise.
@@ -115,26 +113,6 @@ TEST(Pipeline, FarFromTheOriginGivesTheSameMesh) {
     EXPECT_LT(ef.mean, 0.05);
     const double ratio = static_cast<double>(far_mesh.triangles.size()) / static_cast<double>(near_mesh.triangles.size());
     EXPECT_NEAR(ratio, 1.0, 0.01);
-}
-
-TEST(Pipeline, BadInputGivesTypedErrors) {
-    EXPECT_THROW(reconstruct(PointCloud{}, Eigen::Vector3d::Zero(), ReconstructionConfig{}), InvalidInput);
-    const double nan = std::nan("");
-    PointCloud only_nan{{{nan, 0, 0}, {0, nan, 1}}};
-    EXPECT_THROW(reconstruct(only_nan, Eigen::Vector3d::Zero(), ReconstructionConfig{}), InvalidInput);
-    ReconstructionConfig bad;
-    bad.voxel_size = -1;
-    EXPECT_THROW(reconstruct(demo_scan(), Eigen::Vector3d::Zero(), bad), InvalidArgument);
-    // NaN points are dropped and counted; the rest is reconstructed.
-    PointCloud mixed = demo_scan();
-    mixed.points.push_back({nan, 1, 2});
-    ReconstructionSummary summary;
-    const Mesh mesh = reconstruct(mixed, Eigen::Vector3d::Zero(), ReconstructionConfig{}, &summary);
-    EXPECT_EQ(summary.points_dropped, 1u);
-    EXPECT_FALSE(mesh.triangles.empty());
-    // All points identical: no plane anywhere (degenerate covariance), an empty mesh, no crash.
-    PointCloud same{std::vector<Eigen::Vector3d>(100, Eigen::Vector3d(1, 2, 3))};
-    EXPECT_TRUE(reconstruct(same, Eigen::Vector3d::Zero(), ReconstructionConfig{}).triangles.empty());
 }
 
 TEST(Pipeline, RealKittiFrameWhenAvailable) {
