@@ -1,5 +1,8 @@
 // lidarsurf benchmark: the paper's Table I and Fig. 6 on a sequence in the KITTI layout.
+#include <algorithm>
 #include <cstdio>
+#include <map>
+#include <optional>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -7,8 +10,11 @@
 #include "commands.hpp"
 #include "lidarsurf/eval/benchmark.hpp"
 #include "lidarsurf/eval/metrics.hpp"
+#include "lidarsurf/eval/true_surface.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
+#include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/sim/mesh_builder.hpp"
 
 #ifndef LIDARSURF_SOURCE_DIR
 #define LIDARSURF_SOURCE_DIR ""
@@ -54,6 +60,49 @@ fs::path plot_script() {
     return {};
 }
 
+/// A method whose meshes were made by another tool (scripts/peers_open3d.py): DIR/NAME/NNNNNN.ply
+/// per frame and DIR/NAME/times.txt ("frame seconds" lines).
+struct ExternalMethod {
+    std::string name;
+    fs::path dir;
+    std::map<std::size_t, double> seconds;
+};
+
+std::vector<ExternalMethod> external_methods(const std::string& peers) {
+    std::vector<ExternalMethod> out;
+    if (peers.empty()) return out;
+    std::error_code ec;
+    if (!fs::is_directory(peers, ec)) throw IoError(peers + ": not a directory (expected one sub-directory of meshes per method)");
+    for (const auto& entry : fs::directory_iterator(peers, ec)) {
+        if (!entry.is_directory()) continue;
+        ExternalMethod m{entry.path().filename().string(), entry.path(), {}};
+        const fs::path times = entry.path() / "times.txt";
+        if (fs::exists(times)) {
+            std::istringstream in(read_text_file(times));
+            std::size_t frame = 0;
+            double seconds = 0;
+            while (in >> frame >> seconds) m.seconds[frame] = seconds;
+        }
+        out.push_back(std::move(m));
+    }
+    if (ec) throw IoError(peers + ": cannot list the directory (" + ec.message() + ")");
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
+    if (out.empty()) throw InvalidInput(peers + ": no sub-directory of meshes");
+    return out;
+}
+
+/// The frame's true surface in the sensor frame: the static scene and that frame's moving
+/// objects, both stored in the world frame, moved by the inverse of the sensor-to-world pose.
+Mesh true_surface(const Mesh& scene, const KittiSequence& seq, std::size_t frame, const Eigen::Isometry3d& pose) {
+    sim::MeshBuilder builder;
+    builder.append(scene);
+    if (fs::exists(seq.objects(frame))) builder.append(read_mesh(seq.objects(frame)));
+    Mesh truth = builder.take();
+    const Eigen::Isometry3d to_sensor = pose.inverse();
+    for (auto& v : truth.vertices) v = to_sensor * v;
+    return truth;
+}
+
 std::string quoted(const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -63,20 +112,23 @@ std::string quoted(const std::string& s) {
 }  // namespace
 
 CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
-    auto* b = app.add_subcommand("benchmark", "Run the paper's Table I (every mode and IMLS) over a simulated sequence");
+    auto* b = app.add_subcommand("benchmark", "Run the default, the paper's Table I (every mode, as written) and IMLS over a simulated sequence");
     b->footer(
         "Examples:\n"
         "  lidarsurf simulate -o town && lidarsurf benchmark town\n"
         "  lidarsurf benchmark town --frames 10 --methods 'AN+GC kmax=5,IMLS'\n"
-        "Reads DIR/velodyne and DIR/gt (KITTI layout, sensor frame); writes DIR/benchmark/table.txt,\n"
+        "  lidarsurf benchmark town --methods 'AN+GC kmax=5' --peers town/peers\n"
+        "Reads DIR/velodyne and DIR/gt (KITTI layout, sensor frame); with DIR/scene.ply and poses.txt\n"
+        "also the true surface (plus DIR/objects/NNNNNN.ply). Writes DIR/benchmark/table.txt,\n"
         "results.csv, results.json and, with python3-matplotlib, fig6a_range.png and fig6b_delta.png.\n");
     b->add_option("dir", o.dir, "Sequence directory (as written by lidarsurf simulate)")->required();
     b->add_option("--out", o.out, "Output directory (default DIR/benchmark)");
     b->add_option("--frames", o.frames, "Use only the first N frames (0 = all)")->capture_default_str();
     b->add_option("--stride", o.stride, "Use every S-th frame")->capture_default_str();
     b->add_option("--methods", o.methods, "Comma-separated rows to run (default: all of Table I)");
+    b->add_option("--peers", o.peers, "Also evaluate other tools' meshes: DIR/NAME/NNNNNN.ply (scripts/peers_open3d.py)");
     b->add_option("--max-range", o.max_range, "Evaluate only within this range of the sensor (0 = all)")->capture_default_str();
-    b->add_flag("--literal", o.literal, "Paper-literal rows: no planarity guard, no truncation, full dilation");
+    b->add_flag("--ablation", o.ablation, "Run the ablation rows (paper AN+GC to the default, one guard at a time) instead of Table I");
     b->add_flag("--no-plots", o.no_plots, "Do not draw the figures");
     b->add_option("--voxel", o.config.voxel_size, "Voxel size alpha in metres")->capture_default_str();
     b->add_option("--tau", o.config.tau, "Gaussian confidence threshold tau")->capture_default_str();
@@ -88,14 +140,10 @@ CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
 int run_benchmark(const BenchmarkOptions& o) {
     if (o.frames < 0) throw InvalidArgument("--frames must be >= 0");
     if (o.stride < 1) throw InvalidArgument("--stride must be >= 1");
-    ReconstructionConfig base = o.config;
-    if (o.literal) {
-        base.min_planarity = 0;
-        base.truncation_voxels = 0;
-        base.seeded_surface = false;
-    }
+    const ReconstructionConfig& base = o.config;
     base.validate();
-    const std::vector<BenchmarkMethod> methods = select_methods(table_one_methods(base), o.methods);
+    const std::vector<BenchmarkMethod> methods =
+        select_methods(o.ablation ? ablation_methods(base) : table_one_methods(base), o.methods);
     EvaluationConfig ec;
     ec.max_range = o.max_range;
     ec.threads = base.threads;
@@ -114,8 +162,23 @@ int run_benchmark(const BenchmarkOptions& o) {
     fs::create_directories(out, ec_fs);
     if (ec_fs) throw IoError(out.string() + ": cannot create the directory (" + ec_fs.message() + ")");
 
+    const std::vector<ExternalMethod> peers = external_methods(o.peers);
+    // The true surface: the scene mesh and the poses that place it in each sensor frame.
+    const bool has_truth = fs::exists(seq.scene()) && fs::exists(seq.poses());
+    Mesh scene;
+    std::vector<Eigen::Isometry3d> poses;
+    if (has_truth) {
+        scene = read_mesh(seq.scene());
+        poses = read_poses(seq.poses());
+        if (poses.size() < available)
+            throw InvalidInput(seq.poses().string() + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(available) + " scans");
+    } else {
+        std::fprintf(stderr, "benchmark: no %s and poses.txt: the true-surface table is skipped\n", seq.scene().c_str());
+    }
+
     std::vector<std::string> names;
     for (const auto& m : methods) names.push_back(m.name);
+    for (const auto& m : peers) names.push_back(m.name);
     BenchmarkAccumulator acc(names);
     const auto t_start = std::chrono::steady_clock::now();
     for (std::size_t f = 0; f < frames.size(); ++f) {
@@ -124,22 +187,30 @@ int run_benchmark(const BenchmarkOptions& o) {
         drop_non_finite(scan);
         PointCloud gt = read_points(seq.ground_truth(i));
         drop_non_finite(gt);
+        std::optional<MeshDistance> truth;
+        if (has_truth) truth.emplace(true_surface(scene, seq, i, poses[i]));
+        auto add = [&](std::size_t row, const Mesh& mesh, double seconds) {
+            if (mesh.empty()) return acc.add_empty(row);
+            if (!truth) return acc.add(row, evaluate(mesh, gt.points, ec), seconds);
+            const TrueSurfaceMetrics t = evaluate_true_surface(mesh, *truth, gt.points, ec);
+            acc.add(row, evaluate(mesh, gt.points, ec), seconds, &t);
+        };
         for (std::size_t m = 0; m < methods.size(); ++m) {
             const auto t0 = std::chrono::steady_clock::now();
             const Mesh mesh = run_benchmark_method(methods[m], scan, Eigen::Vector3d::Zero());
-            const double seconds = ms_since(t0) / 1e3;
-            if (mesh.empty()) {
-                acc.add_empty(m);
-                continue;
-            }
-            acc.add(m, evaluate(mesh, gt.points, ec), seconds);
+            add(m, mesh, ms_since(t0) / 1e3);
+        }
+        for (std::size_t p = 0; p < peers.size(); ++p) {
+            const fs::path file = peers[p].dir / (KittiSequence::frame_name(i) + ".ply");
+            const auto t = peers[p].seconds.find(i);
+            add(methods.size() + p, fs::exists(file) ? read_mesh(file) : Mesh{}, t == peers[p].seconds.end() ? 0.0 : t->second);
         }
         std::fprintf(stderr, "benchmark: frame %zu (%zu/%zu), %zu methods, %.0f s elapsed\n", i, f + 1, frames.size(), methods.size(),
                      ms_since(t_start) / 1e3);
     }
-    std::string label = o.dir + (o.literal ? " (paper-literal rows)" : "");
+    std::string label = o.dir + (o.ablation ? " (ablation)" : "");
     const BenchmarkResult result = acc.finish(label, frames.size());
-    const std::string table = format_table_one(result);
+    const std::string table = format_table_one(result) + "\n" + format_true_surface(result);
     std::printf("%s", table.c_str());
     write_text((out / "table.txt").string(), table);
     write_text((out / "results.csv").string(), to_csv(result));

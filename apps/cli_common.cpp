@@ -60,10 +60,18 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
     app->add_option("--k", c.k, "Neighbourhood level k (constant modes cn, cn+gc)")->capture_default_str();
     app->add_option("--mode", o.mode, "an+gc | an | cn+gc | cn (Sec. IV-B)")->capture_default_str();
     app->add_option("--origin", o.origin, "Sensor position x,y,z (orients the normals, Eq. 2)")->capture_default_str();
-    app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = paper-literal)")->capture_default_str();
-    app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)")->capture_default_str();
-    app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)")->capture_default_str();
-    app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel")->capture_default_str();
+    auto* literal = app->add_flag("--literal", o.literal,
+                                  "The paper as written: no planarity or thickness guard, no truncation, every defined cube, no snapping");
+    for (auto* opt : {
+             app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"),
+             app->add_option("--max-thickness", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"),
+             app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"),
+             app->add_option("--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"),
+             app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"),
+             app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"),
+             app->add_option("--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"),
+         })
+        opt->capture_default_str()->excludes(literal);
     app->add_option("--max-memory", c.max_memory_mb, "Memory budget in MiB: refuse (exit 5, with the estimate) a cloud needing more")->capture_default_str();
     app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
@@ -81,6 +89,7 @@ Method resolve_method(const ReconstructOptions& o) {
     Method m;
     m.config = o.config;
     m.config.mode = parse_mode(o.mode);
+    if (o.literal) m.config.make_paper_literal();
     m.config.validate();
     if (o.method == "imls") m.imls = true;
     else if (o.method != "paper") throw InvalidArgument("unknown method '" + o.method + "' (expected paper or imls)");

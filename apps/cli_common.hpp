@@ -29,6 +29,7 @@ struct ReconstructOptions {
     ReconstructionConfig config;  // paper defaults, defined once in ReconstructionConfig
     ImlsConfig imls;              // only the fields given on the command line are used
     bool imls_radius = false, imls_k = false, imls_h = false, imls_truncation = false;
+    bool literal = false;  // ReconstructionConfig::make_paper_literal()
 };
 void add_reconstruct_options(CLI::App* app, ReconstructOptions& o);
 

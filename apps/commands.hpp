@@ -29,9 +29,9 @@ CLI::App* add_render_command(CLI::App& app, RenderOptions& o);
 int run_render(const RenderOptions& o);
 
 struct BenchmarkOptions {
-    std::string dir, out, methods;
+    std::string dir, out, methods, peers;
     int frames = 0, stride = 1;
-    bool no_plots = false, literal = false;
+    bool no_plots = false, ablation = false;
     double max_range = 0;
     ReconstructionConfig config;  // alpha, tau, N_min, guards, threads; the rows set mode and k
 };

@@ -9,6 +9,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/mesh/mesh_filter.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
@@ -80,6 +81,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
                                             " blocks, max level " + std::to_string(config_.max_level())));
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     Mesh mesh;
+    const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
     arena.execute([&] {
         auto t0 = std::chrono::steady_clock::now();
         if (config_.seeded_surface && evaluation == Evaluation::Fast) {
@@ -88,7 +90,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
             summary_.candidate_vertices = seeded.evaluated;
             summary_.defined_vertices = seeded.field.size();
             t0 = std::chrono::steady_clock::now();
-            mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes);
+            mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, placement);
         } else {
             TsdfStats stats;
             const TsdfField field = compute_tsdf(grid_, config_, sensor_, &stats);
@@ -98,13 +100,14 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
                 const std::vector<VoxelKey> cubes = seeded_cubes(field, grid_, config_.seed_dilation);
                 summary_.seconds_tsdf = seconds_since(t0);
                 t0 = std::chrono::steady_clock::now();
-                mesh = lidarsurf::extract_mesh(field, cubes);
+                mesh = lidarsurf::extract_mesh(field, cubes, placement);
             } else {
                 summary_.seconds_tsdf = seconds_since(t0);
                 t0 = std::chrono::steady_clock::now();
-                mesh = lidarsurf::extract_mesh(field);
+                mesh = lidarsurf::extract_mesh(field, placement);
             }
         }
+        remove_small_components(mesh, static_cast<std::size_t>(config_.min_component_triangles));
         summary_.seconds_mesh = seconds_since(t0);
     });
     summary_.mesh_vertices = mesh.vertices.size();

@@ -121,8 +121,15 @@ PYBIND11_MODULE(_lidarsurf, m) {
 
     py::class_<ReconstructionConfig>(m, "Config",
                                      "Reconstruction parameters: the C++ ReconstructionConfig, with the paper's defaults "
-                                     "(alpha 0.2 m, tau 0.2, N_min 10, k_max 5). validate() raises ValueError on a bad value.")
-        .def(py::init<>(), "A configuration with the paper's defaults.")
+                                     "(alpha 0.2 m, tau 0.2, N_min 10, k_max 5) and lidarsurf's guards on; Config.paper() "
+                                     "is the paper as written. validate() raises ValueError on a bad value.")
+        .def(py::init<>(), "The default configuration: the paper's parameters with lidarsurf's guards on.")
+        .def_static(
+            "paper", [](const std::string& mode) { return ReconstructionConfig::paper(parse_mode(mode)); }, py::arg("mode") = "an+gc",
+            "The paper's method as written in `mode`: no planarity or thickness guard, no truncation, every defined cube "
+            "meshed, interpolated vertices.")
+        .def("make_paper_literal", &ReconstructionConfig::make_paper_literal,
+             "Turn every guard off as Config.paper() does, keeping the other fields.")
         .def_readwrite("voxel_size", &ReconstructionConfig::voxel_size, "Voxel size alpha, metres.")
         .def_readwrite("tau", &ReconstructionConfig::tau, "Gaussian confidence threshold tau of Eq. (3).")
         .def_readwrite("n_min", &ReconstructionConfig::n_min, "N_min of Eq. (1): minimum points in a neighbourhood.")
@@ -133,7 +140,13 @@ PYBIND11_MODULE(_lidarsurf, m) {
             [](ReconstructionConfig& c, const std::string& s) { c.mode = parse_mode(s); },
             "Neighbourhood strategy: 'an+gc' (default), 'an', 'cn+gc' or 'cn'.")
         .def_readwrite("min_planarity", &ReconstructionConfig::min_planarity,
-                       "Reject neighbourhoods with lambda2 < min_planarity * lambda1 (0 = paper-literal).")
+                       "Reject neighbourhoods with lambda2 < min_planarity * lambda1 (0 = off, as the paper).")
+        .def_readwrite("max_thickness", &ReconstructionConfig::max_thickness,
+                       "Reject neighbourhoods with sqrt(lambda3) above this many voxels (0 = off, as the paper).")
+        .def_readwrite("snap_to_plane", &ReconstructionConfig::snap_to_plane,
+                       "Move each mesh vertex onto the plane of the nearer lattice vertex of its edge (False: interpolate).")
+        .def_readwrite("min_component_triangles", &ReconstructionConfig::min_component_triangles,
+                       "Drop connected mesh pieces with fewer triangles (0 keeps all).")
         .def_readwrite("truncation_voxels", &ReconstructionConfig::truncation_voxels, "TSDF truncation in voxels (0 = none).")
         .def_readwrite("seeded_surface", &ReconstructionConfig::seeded_surface,
                        "Keep only the surface connected to the data (False: every cube with defined corners).")
@@ -146,7 +159,9 @@ PYBIND11_MODULE(_lidarsurf, m) {
             std::ostringstream o;
             o << "Config(voxel_size=" << c.voxel_size << ", tau=" << c.tau << ", n_min=" << c.n_min << ", k_max=" << c.k_max
               << ", k=" << c.k << ", mode='" << to_string(c.mode) << "', min_planarity=" << c.min_planarity
-              << ", truncation_voxels=" << c.truncation_voxels << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")
+              << ", max_thickness=" << c.max_thickness << ", truncation_voxels=" << c.truncation_voxels
+              << ", snap_to_plane=" << (c.snap_to_plane ? "True" : "False") << ", min_component_triangles=" << c.min_component_triangles
+              << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")
               << ", seed_dilation=" << c.seed_dilation << ", threads=" << c.threads << ")";
             return o.str();
         });

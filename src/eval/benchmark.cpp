@@ -11,17 +11,28 @@
 
 namespace lidarsurf {
 
+namespace {
+
+BenchmarkMethod method_row(std::string name, const ReconstructionConfig& config) {
+    BenchmarkMethod m;
+    m.name = std::move(name);
+    m.config = config;
+    m.config.validate();
+    return m;
+}
+
+}  // namespace
+
 std::vector<BenchmarkMethod> table_one_methods(const ReconstructionConfig& base) {
     std::vector<BenchmarkMethod> rows;
+    rows.push_back(method_row("default", base));
     auto add = [&](const char* label, Mode mode, int level) {
-        BenchmarkMethod m;
-        m.config = base;
-        m.config.mode = mode;
-        const bool adaptive = mode == Mode::AdaptiveGaussian || mode == Mode::Adaptive;
-        (adaptive ? m.config.k_max : m.config.k) = level;
-        m.name = std::string(label) + (adaptive ? " kmax=" : " k=") + std::to_string(level);
-        m.config.validate();
-        rows.push_back(std::move(m));
+        ReconstructionConfig c = base;
+        c.mode = mode;
+        c.make_paper_literal();
+        const bool adaptive = c.adaptive();
+        (adaptive ? c.k_max : c.k) = level;
+        rows.push_back(method_row(std::string(label) + (adaptive ? " kmax=" : " k=") + std::to_string(level), c));
     };
     for (int k : {5, 3}) add("AN+GC", Mode::AdaptiveGaussian, k);
     for (int k : {5, 3}) add("AN", Mode::Adaptive, k);
@@ -34,6 +45,36 @@ std::vector<BenchmarkMethod> table_one_methods(const ReconstructionConfig& base)
     imls.imls_config = ImlsConfig::matching(base);
     imls.imls_config.validate();
     rows.push_back(std::move(imls));
+    return rows;
+}
+
+std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base) {
+    std::vector<BenchmarkMethod> rows;
+    ReconstructionConfig c = base;
+    c.make_paper_literal();
+    rows.push_back(method_row("paper AN+GC", c));
+    c.min_planarity = base.min_planarity;
+    rows.push_back(method_row("+planarity", c));
+    c.seeded_surface = base.seeded_surface;
+    c.seed_dilation = base.seed_dilation;
+    c.truncation_voxels = std::sqrt(3.0);
+    rows.push_back(method_row("+seeded, trunc sqrt3", c));
+    c.max_thickness = base.max_thickness;
+    rows.push_back(method_row("+thickness", c));
+    c.truncation_voxels = base.truncation_voxels;
+    rows.push_back(method_row("+trunc 1", c));
+    c.snap_to_plane = base.snap_to_plane;
+    c.min_component_triangles = base.min_component_triangles;
+    rows.push_back(method_row("+snap (default)", c));
+    for (int k : {3, 7}) {
+        ReconstructionConfig ck = base;
+        ck.k_max = k;
+        rows.push_back(method_row("default kmax=" + std::to_string(k), ck));
+    }
+    ReconstructionConfig fine = base;
+    fine.voxel_size = base.voxel_size / 2;
+    fine.k_max = 2 * base.k_max;
+    rows.push_back(method_row("default alpha/2 kmax*2", fine));
     return rows;
 }
 
@@ -59,7 +100,26 @@ BenchmarkAccumulator::BenchmarkAccumulator(std::vector<std::string> names) {
     }
 }
 
-void BenchmarkAccumulator::add(std::size_t i, const EvaluationResult& r, double seconds) {
+namespace {
+
+void add_directed(DirectedError& sum, const DirectedError& e) {
+    sum.count += e.count;
+    sum.mean += e.mean;
+    sum.max += e.max;
+    sum.median += e.median;
+    sum.p90 += e.p90;
+}
+
+void divide(DirectedError& e, double n) {
+    e.mean /= n;
+    e.max /= n;
+    e.median /= n;
+    e.p90 /= n;
+}
+
+}  // namespace
+
+void BenchmarkAccumulator::add(std::size_t i, const EvaluationResult& r, double seconds, const TrueSurfaceMetrics* truth) {
     Sum& s = sums_.at(i);
     MethodAggregate& a = s.agg;
     delta_ = r.delta;
@@ -68,15 +128,18 @@ void BenchmarkAccumulator::add(std::size_t i, const EvaluationResult& r, double 
     a.seconds += seconds;
     a.vertices += static_cast<double>(r.mesh_vertices);
     a.triangles += static_cast<double>(r.mesh_triangles);
-    auto add_dir = [](DirectedError& sum, const DirectedError& e) {
-        sum.count += e.count;
-        sum.mean += e.mean;
-        sum.max += e.max;
-        sum.median += e.median;
-        sum.p90 += e.p90;
-    };
-    add_dir(a.p_to_gt, r.vertex.p_to_gt);
-    add_dir(a.gt_to_p, r.vertex.gt_to_p);
+    if (truth) {
+        ++a.truth_frames;
+        a.truth.samples += truth->samples;
+        add_directed(a.truth.error, truth->error);
+        add_directed(a.truth.vertex_error, truth->vertex_error);
+        add_directed(a.truth.completeness, truth->completeness);
+        a.truth.precision += truth->precision;
+        a.truth.recall += truth->recall;
+        a.truth.fscore += truth->fscore;
+    }
+    add_directed(a.p_to_gt, r.vertex.p_to_gt);
+    add_directed(a.gt_to_p, r.vertex.gt_to_p);
     a.ae_sym += r.vertex.ae_sym;
     a.hd_sym += r.vertex.hd_sym;
     a.share_within_delta += r.vertex.share_within_delta;
@@ -119,11 +182,11 @@ BenchmarkResult BenchmarkAccumulator::finish(std::string dataset, std::size_t fr
         for (double* v : {&a.seconds, &a.vertices, &a.triangles, &a.ae_sym, &a.hd_sym, &a.share_within_delta, &a.accuracy, &a.completeness,
                           &a.chamfer_l1, &a.precision, &a.recall, &a.fscore})
             *v /= n;
-        for (DirectedError* e : {&a.p_to_gt, &a.gt_to_p}) {
-            e->mean /= n;
-            e->max /= n;
-            e->median /= n;
-            e->p90 /= n;
+        for (DirectedError* e : {&a.p_to_gt, &a.gt_to_p}) divide(*e, n);
+        if (a.truth_frames > 0) {
+            const double t = static_cast<double>(a.truth_frames);
+            for (DirectedError* e : {&a.truth.error, &a.truth.vertex_error, &a.truth.completeness}) divide(*e, t);
+            for (double* v : {&a.truth.precision, &a.truth.recall, &a.truth.fscore}) *v /= t;
         }
         for (double& v : a.curve_share) v /= n;
         for (std::size_t b = 0; b < a.by_range.size(); ++b) {
@@ -162,16 +225,52 @@ std::string format_table_one(const BenchmarkResult& r) {
     return o.str();
 }
 
+std::string format_true_surface(const BenchmarkResult& r) {
+    bool any = false;
+    for (const auto& m : r.methods) any = any || m.truth_frames > 0;
+    if (!any) return {};
+    std::ostringstream o;
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "%s: against the true scene triangles, averages per frame (metres)\n", r.dataset.c_str());
+    o << buf;
+    std::snprintf(buf, sizeof buf, "%-22s | %-22s | %-22s | %6s %6s %6s | %8s %9s\n", "", "mesh -> true surface", "GT -> mesh (completeness)",
+                  "", "", "", "", "");
+    o << buf;
+    std::snprintf(buf, sizeof buf, "%-22s | %6s %6s %6s   | %6s %6s %6s   | %6s %6s %6s | %8s %9s\n", "method", "mean", "median", "p90", "mean",
+                  "median", "p90", "prec", "recall", "F", "time s", "triangles");
+    o << buf << std::string(118, '-') << "\n";
+    for (const auto& m : r.methods) {
+        if (m.truth_frames == 0) {
+            std::snprintf(buf, sizeof buf, "%-22s | no frame with a mesh and a known true surface (%zu empty)\n", m.name.c_str(), m.empty);
+            o << buf;
+            continue;
+        }
+        const TrueSurfaceMetrics& t = m.truth;
+        std::snprintf(buf, sizeof buf, "%-22s | %6.3f %6.3f %6.3f   | %6.3f %6.3f %6.3f   | %5.1f%% %5.1f%% %5.1f%% | %8.3f %9.0f\n",
+                      m.name.c_str(), t.error.mean, t.error.median, t.error.p90, t.completeness.mean, t.completeness.median,
+                      t.completeness.p90, 100 * t.precision, 100 * t.recall, 100 * t.fscore, m.seconds, m.triangles);
+        o << buf;
+    }
+    std::snprintf(buf, sizeof buf, "exact point-to-triangle distances; prec/recall/F at %.2f m; empty frames are not averaged\n", r.threshold);
+    o << buf;
+    return o.str();
+}
+
 std::string to_csv(const BenchmarkResult& r) {
     std::ostringstream o;
     o << "method,frames,empty,ae_p_to_gt,ae_gt_to_p,ae_sym,hd_p_to_gt,hd_gt_to_p,hd_sym,median_p_to_gt,p90_p_to_gt,share_within_delta,"
-         "accuracy,completeness,chamfer_l1,precision,recall,fscore,vertices,triangles,seconds\n";
+         "accuracy,completeness,chamfer_l1,precision,recall,fscore,vertices,triangles,seconds,truth_frames,true_error_mean,true_error_median,"
+         "true_error_p90,true_vertex_error_mean,true_completeness_mean,true_completeness_median,true_precision,true_recall,true_fscore\n";
     char buf[1024];
     for (const auto& m : r.methods) {
-        std::snprintf(buf, sizeof buf, "\"%s\",%zu,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.1f,%.1f,%.6g\n",
+        const TrueSurfaceMetrics& t = m.truth;
+        std::snprintf(buf, sizeof buf,
+                      "\"%s\",%zu,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.1f,%.1f,%.6g,"
+                      "%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
                       m.name.c_str(), m.frames, m.empty, m.p_to_gt.mean, m.gt_to_p.mean, m.ae_sym, m.p_to_gt.max, m.gt_to_p.max, m.hd_sym,
                       m.p_to_gt.median, m.p_to_gt.p90, m.share_within_delta, m.accuracy, m.completeness, m.chamfer_l1, m.precision,
-                      m.recall, m.fscore, m.vertices, m.triangles, m.seconds);
+                      m.recall, m.fscore, m.vertices, m.triangles, m.seconds, m.truth_frames, t.error.mean, t.error.median, t.error.p90,
+                      t.vertex_error.mean, t.completeness.mean, t.completeness.median, t.precision, t.recall, t.fscore);
         o << buf;
     }
     return o.str();
@@ -203,7 +302,16 @@ std::string to_json(const BenchmarkResult& r) {
                            {"recall", m.recall},
                            {"fscore", m.fscore},
                            {"curve", {{"delta", m.curve_delta}, {"share", m.curve_share}}},
-                           {"by_range", bins}});
+                           {"by_range", bins},
+                           {"truth", m.truth_frames == 0 ? json(nullptr)
+                                                         : json{{"frames", m.truth_frames},
+                                                                {"samples", m.truth.samples},
+                                                                {"error", directed(m.truth.error)},
+                                                                {"vertex_error", directed(m.truth.vertex_error)},
+                                                                {"completeness", directed(m.truth.completeness)},
+                                                                {"precision", m.truth.precision},
+                                                                {"recall", m.truth.recall},
+                                                                {"fscore", m.truth.fscore}}}});
     }
     json j = {{"dataset", r.dataset}, {"frames", r.frames}, {"delta", r.delta}, {"threshold", r.threshold}, {"methods", methods}};
     return j.dump(2) + "\n";

@@ -59,7 +59,7 @@ using WeldSlots = std::array<std::uint32_t, 4>;
 
 class MeshBuilder {
 public:
-    explicit MeshBuilder(const TsdfField& field) : field_(field), lookup_(field) {}
+    MeshBuilder(const TsdfField& field, VertexPlacement placement) : field_(field), placement_(placement), lookup_(field) {}
 
     void process_cube(const VoxelKey& base) {
         std::array<const VertexSample*, 8> s{};
@@ -168,7 +168,14 @@ private:
 
         const double tc = id.axis == 3 ? (t <= 0 ? 0.0 : 1.0) : t;
         const Eigen::Vector3d pa = a.cast<double>() * field_.voxel_size, pb = b.cast<double>() * field_.voxel_size;
-        mesh_.vertices.push_back(field_.origin + pa + tc * (pb - pa));
+        Eigen::Vector3d x = pa + tc * (pb - pa);
+        if (placement_ == VertexPlacement::SnappedToPlane) {
+            // The plane of the nearer end e: n . (x - p_e) + tsdf_e = 0, since tsdf_e = n . (p_e - mu).
+            const VertexSample& s = tc < 0.5 ? sa : sb;
+            const Eigen::Vector3d n = s.normal.cast<double>();
+            x -= (n.dot(x - (tc < 0.5 ? pa : pb)) + s.tsdf) * n;
+        }
+        mesh_.vertices.push_back(field_.origin + x);
         Eigen::Vector3f n = (1.0f - static_cast<float>(tc)) * sa.normal + static_cast<float>(tc) * sb.normal;
         if (n.squaredNorm() < 1e-12f) n = tc < 0.5 ? sa.normal : sb.normal;
         mesh_.normals.push_back(n.normalized());
@@ -187,6 +194,7 @@ private:
     }
 
     const TsdfField& field_;
+    VertexPlacement placement_;
     Mesh mesh_;
     TsdfField::Accessor lookup_;
     BlockMap<WeldSlots> ids_{WeldSlots{kNone, kNone, kNone, kNone}};
@@ -194,16 +202,16 @@ private:
 
 }  // namespace
 
-Mesh extract_mesh(const TsdfField& field) {
-    MeshBuilder builder(field);
+Mesh extract_mesh(const TsdfField& field, VertexPlacement placement) {
+    MeshBuilder builder(field, placement);
     // Every defined vertex is tried as the minimum corner of a cube; sorted keys give a
     // deterministic vertex and triangle order.
     for (const VoxelKey& v : field.keys()) builder.process_cube(v);
     return builder.take();
 }
 
-Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes) {
-    MeshBuilder builder(field);
+Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, VertexPlacement placement) {
+    MeshBuilder builder(field, placement);
     for (const VoxelKey& v : cubes) builder.process_cube(v);
     return builder.take();
 }

@@ -29,6 +29,22 @@ Mode parse_mode(std::string_view name) {
     throw InvalidArgument("unknown mode '" + std::string(name) + "' (expected an+gc, an, cn+gc or cn)");
 }
 
+ReconstructionConfig ReconstructionConfig::paper(Mode mode) {
+    ReconstructionConfig c;
+    c.mode = mode;
+    c.make_paper_literal();
+    return c;
+}
+
+void ReconstructionConfig::make_paper_literal() {
+    min_planarity = 0;
+    max_thickness = 0;
+    truncation_voxels = 0;
+    seeded_surface = false;
+    snap_to_plane = false;
+    min_component_triangles = 0;
+}
+
 int ReconstructionConfig::max_level() const { return adaptive() ? k_max : k; }
 
 void ReconstructionConfig::validate() const {
@@ -42,6 +58,9 @@ void ReconstructionConfig::validate() const {
     if (k < 1 || k > kMaxNeighbourhoodLevel) fail("k must be in " + range + " (got " + std::to_string(k) + ")");
     if (!std::isfinite(min_planarity) || min_planarity < 0 || min_planarity >= 1)
         fail("min_planarity must be in [0, 1) (got " + std::to_string(min_planarity) + ")");
+    if (!std::isfinite(max_thickness) || max_thickness < 0 || max_thickness > 1e3)
+        fail("max thickness must be within [0, 1e3] voxels (0 disables it; got " + std::to_string(max_thickness) + ")");
+    if (min_component_triangles < 0) fail("min component triangles must be >= 0 (got " + std::to_string(min_component_triangles) + ")");
     if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
         fail("truncation must be finite and >= 0 voxels (0 disables it; got " + std::to_string(truncation_voxels) + ")");
     if (truncation_voxels > 0 && truncation_voxels < 0.8660254037844386)

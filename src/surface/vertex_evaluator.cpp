@@ -43,6 +43,8 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
                             EigenSolver solver) {
     const auto plane = fit_plane(stats, config.n_min, sensor_local, min_lambda2, config.min_planarity, solver);  // Eq. (1), (2)
     if (!plane) return {};
+    const double thickness = config.max_thickness * config.voxel_size;
+    if (thickness > 0 && plane->lambda3 > thickness * thickness) return {};  // not one surface
     const double confidence = gaussian_confidence(*plane, position);  // Eq. (3)
     if (config.gaussian() && confidence < config.tau) return {};
     return make_sample(*plane, position, level, confidence);

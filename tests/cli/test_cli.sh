@@ -37,9 +37,20 @@ for f in velodyne/000000.bin velodyne/000001.bin gt/000000.bin gt/000001.bin obj
 done
 [ "$(wc -l < "$seq/poses.txt")" -eq 2 ] || { echo "FAIL: poses.txt should have 2 lines"; fail=$((fail + 1)); }
 [ "$(wc -w < "$seq/poses.txt")" -eq 24 ] || { echo "FAIL: poses.txt should hold 2 x 12 numbers"; fail=$((fail + 1)); }
-expect 0 "Average Error.*AN\+GC kmax=5|AN\+GC kmax=5" -- "$cli" benchmark "$seq" --no-plots
-[ "$(wc -l < "$seq/benchmark/results.csv")" -eq 12 ] || { echo "FAIL: results.csv should have a header and 11 rows"; fail=$((fail + 1)); }
+expect 0 "against the true scene triangles" -- "$cli" benchmark "$seq" --frames 1 --no-plots
+[ "$(wc -l < "$seq/benchmark/results.csv")" -eq 13 ] || { echo "FAIL: results.csv should have a header and 12 rows"; fail=$((fail + 1)); }
 grep -q '"by_range"' "$seq/benchmark/results.json" || { echo "FAIL: results.json lacks the range bins"; fail=$((fail + 1)); }
+grep -q '"truth": {' "$seq/benchmark/results.json" || { echo "FAIL: results.json lacks the true-surface metrics"; fail=$((fail + 1)); }
+# Another tool's meshes (--peers): a copy of our own frame-0 mesh must score exactly as "default".
+mkdir -p "$dir/peers/copy"
+"$cli" reconstruct "$seq/velodyne/000000.bin" -o "$dir/peers/copy/000000.ply" > /dev/null
+printf '0 1.5\n' > "$dir/peers/copy/times.txt"
+expect 0 "copy .* 1.500" -- "$cli" benchmark "$seq" --frames 1 --methods default --peers "$dir/peers" --no-plots --out "$dir/bench_peers"
+# (the PLY stores float32 vertices: equal to 1e-4 m / 1e-4 in every true-surface column)
+row() { grep "^\"$1\"" "$dir/bench_peers/results.csv" | cut -d, -f22-31; }
+same=$(paste -d, <(row default | tr , '\n') <(row copy | tr , '\n') | awk -F, 'NF == 2 && $1 != "" { n++; d = $1 - $2; if (d < 0) d = -d; if (d > 1e-4) bad++ } END { print (n == 10 && !bad) ? "yes" : "no" }')
+[ "$same" = yes ] || { echo "FAIL: a copied mesh should score as the original: '$(row default)' vs '$(row copy)'"; fail=$((fail + 1)); }
+expect 2 "excludes" -- "$cli" reconstruct "$seq/velodyne/000000.bin" -o "$dir/lit.ply" --literal --snap 0
 if /usr/bin/python3 -c 'import matplotlib' 2>/dev/null; then
     expect 0 "IMLS" -- "$cli" benchmark "$seq" --frames 1 --methods 'AN+GC kmax=5,IMLS' --out "$dir/bench1"
     [ -s "$dir/bench1/fig6a_range.png" ] && [ -s "$dir/bench1/fig6b_delta.png" ] || { echo "FAIL: figures not drawn"; fail=$((fail + 1)); }

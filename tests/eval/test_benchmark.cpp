@@ -14,16 +14,52 @@ TEST(Benchmark, TableOneRows) {
     const auto rows = table_one_methods(ReconstructionConfig{});
     std::vector<std::string> names;
     for (const auto& r : rows) names.push_back(r.name);
-    EXPECT_EQ(names, (std::vector<std::string>{"AN+GC kmax=5", "AN+GC kmax=3", "AN kmax=5", "AN kmax=3", "CN+GC k=5", "CN+GC k=3", "CN+GC k=1",
-                                                "CN k=5", "CN k=3", "CN k=1", "IMLS"}));
-    EXPECT_EQ(rows[0].config.mode, Mode::AdaptiveGaussian);
-    EXPECT_EQ(rows[1].config.k_max, 3);
-    EXPECT_EQ(rows[6].config.mode, Mode::ConstantGaussian);
-    EXPECT_EQ(rows[6].config.k, 1);
-    EXPECT_EQ(rows[9].config.mode, Mode::Constant);
-    EXPECT_TRUE(rows[10].imls);
-    EXPECT_DOUBLE_EQ(rows[10].imls_config.radius, 1.0);  // alpha * k_max (Sec. IV-A)
-    EXPECT_EQ(rows[10].imls_config.normal_k, 10);
+    EXPECT_EQ(names, (std::vector<std::string>{"default", "AN+GC kmax=5", "AN+GC kmax=3", "AN kmax=5", "AN kmax=3", "CN+GC k=5", "CN+GC k=3",
+                                                "CN+GC k=1", "CN k=5", "CN k=3", "CN k=1", "IMLS"}));
+    // "default" is the configuration given; the Table I rows are the paper as written.
+    const ReconstructionConfig def;
+    EXPECT_EQ(rows[0].config.max_thickness, def.max_thickness);
+    EXPECT_EQ(rows[0].config.snap_to_plane, def.snap_to_plane);
+    EXPECT_EQ(rows[0].config.truncation_voxels, def.truncation_voxels);
+    for (std::size_t i = 1; i <= 10; ++i) {
+        const ReconstructionConfig& c = rows[i].config;
+        EXPECT_EQ(c.min_planarity, 0) << rows[i].name;
+        EXPECT_EQ(c.max_thickness, 0) << rows[i].name;
+        EXPECT_EQ(c.truncation_voxels, 0) << rows[i].name;
+        EXPECT_FALSE(c.seeded_surface) << rows[i].name;
+        EXPECT_FALSE(c.snap_to_plane) << rows[i].name;
+    }
+    EXPECT_EQ(rows[1].config.mode, Mode::AdaptiveGaussian);
+    EXPECT_EQ(rows[2].config.k_max, 3);
+    EXPECT_EQ(rows[7].config.mode, Mode::ConstantGaussian);
+    EXPECT_EQ(rows[7].config.k, 1);
+    EXPECT_EQ(rows[10].config.mode, Mode::Constant);
+    EXPECT_TRUE(rows[11].imls);
+    EXPECT_DOUBLE_EQ(rows[11].imls_config.radius, 1.0);  // alpha * k_max (Sec. IV-A)
+    EXPECT_EQ(rows[11].imls_config.normal_k, 10);
+}
+
+TEST(Benchmark, AblationAddsOneGuardPerRow) {
+    const ReconstructionConfig def;
+    const auto rows = ablation_methods(def);
+    ASSERT_GE(rows.size(), 6u);
+    const ReconstructionConfig paper = ReconstructionConfig::paper();
+    EXPECT_EQ(rows[0].config.min_planarity, paper.min_planarity);
+    EXPECT_EQ(rows[0].config.seeded_surface, paper.seeded_surface);
+    EXPECT_EQ(rows[1].config.min_planarity, def.min_planarity);
+    EXPECT_TRUE(rows[2].config.seeded_surface);
+    EXPECT_EQ(rows[2].config.max_thickness, 0);
+    EXPECT_EQ(rows[3].config.max_thickness, def.max_thickness);
+    EXPECT_EQ(rows[4].config.truncation_voxels, def.truncation_voxels);
+    EXPECT_FALSE(rows[4].config.snap_to_plane);
+    // The last step of the ablation is the default itself.
+    const ReconstructionConfig& last = rows[5].config;
+    EXPECT_TRUE(last.snap_to_plane);
+    EXPECT_EQ(last.min_planarity, def.min_planarity);
+    EXPECT_EQ(last.max_thickness, def.max_thickness);
+    EXPECT_EQ(last.truncation_voxels, def.truncation_voxels);
+    EXPECT_EQ(last.seeded_surface, def.seeded_surface);
+    EXPECT_EQ(last.k_max, def.k_max);
 }
 
 EvaluationResult fake(double ae, double hd, double f, std::size_t n, double bin_ae) {
@@ -83,7 +119,8 @@ TEST(Benchmark, PaperClaimsHoldOnATownFrame) {
         const Mesh m = run_benchmark_method(rows[row], f.scan, Eigen::Vector3d::Zero());
         return evaluate(m, f.ground_truth.points, EvaluationConfig{});
     };
-    const EvaluationResult angc = measure(0), an = measure(2), cn1 = measure(9), imls = measure(10);
+    // Rows: 0 default, 1 AN+GC kmax=5, 3 AN kmax=5, 10 CN k=1, 11 IMLS (the paper as written).
+    const EvaluationResult angc = measure(1), an = measure(3), cn1 = measure(10), imls = measure(11);
     EXPECT_LT(angc.vertex.ae_sym, imls.vertex.ae_sym);
     EXPECT_LE(angc.vertex.p_to_gt.mean, 0.6 * imls.vertex.p_to_gt.mean);
     EXPECT_GE(angc.vertex.share_within_delta, 1.5 * imls.vertex.share_within_delta);

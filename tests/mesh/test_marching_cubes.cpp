@@ -54,6 +54,43 @@ TEST(MarchingCubes, SphereIsAccurateClosedManifoldAndOutward) {
     ASSERT_EQ(mesh.levels.size(), mesh.vertices.size());
 }
 
+TEST(MarchingCubes, SnappedVerticesLieOnTheNearerEndsPlane) {
+    // A tilted plane n.p = d, given at every lattice vertex as (tsdf, normal): the plane of each
+    // lattice vertex is the plane itself, so snapped vertices lie on it to rounding, and snapping
+    // moves vertices only (same triangles).
+    const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+    const double d = 0.037, alpha = 0.2;
+    TsdfField field = sample_field(alpha, 6, [&](const Eigen::Vector3d& p) { return n.dot(p) - d; });
+    std::vector<VoxelKey> keys = field.keys();
+    TsdfField tilted;
+    tilted.voxel_size = alpha;
+    for (const VoxelKey& k : keys) {
+        VertexSample s = *field.find(k);
+        s.normal = n.cast<float>();
+        tilted.insert(k, s);
+    }
+    const Mesh a = extract_mesh(tilted, VertexPlacement::Interpolated);
+    const Mesh b = extract_mesh(tilted, VertexPlacement::SnappedToPlane);
+    ASSERT_GT(a.triangles.size(), 50u);
+    EXPECT_EQ(a.triangles, b.triangles);
+    for (const auto& v : b.vertices) EXPECT_NEAR(n.dot(v), d, 1e-6);  // float normals and values
+}
+
+TEST(MarchingCubes, SnappingOntoTangentPlanesKeepsASphereAccurate) {
+    // Exact sphere SDF with radial normals: each lattice vertex's plane is the tangent plane at its
+    // closest sphere point, so a snapped vertex is off the sphere by at most the sagitta over one
+    // cube diagonal, (sqrt(3) alpha)^2 / (2 r).
+    const double alpha = 0.1, r = 1.03;
+    const TsdfField field = sample_field(alpha, 14, [&](const Eigen::Vector3d& p) { return p.norm() - r; });
+    const Mesh mesh = extract_mesh(field, VertexPlacement::SnappedToPlane);
+    ASSERT_GT(mesh.triangles.size(), 1000u);
+    const double sagitta = 3 * alpha * alpha / (2 * r);
+    for (const auto& v : mesh.vertices) EXPECT_LT(std::fabs(v.norm() - r), sagitta);
+    const auto topo = test::topology(mesh);
+    EXPECT_EQ(topo.boundary_edges, 0u);
+    EXPECT_EQ(topo.euler, 2);
+}
+
 TEST(MarchingCubes, RandomFieldsGiveClosedConsistentlyOrientedSurfaces) {
     // Random values exercise every cube configuration and both face ambiguities; a positive border
     // makes every component closed. Properties checked: no boundary, manifold edges, coherent winding.

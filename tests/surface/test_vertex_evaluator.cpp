@@ -3,6 +3,11 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
+#include "test_util.hpp"
+
+#include <random>
+
+#include <Eigen/Eigenvalues>
 
 using namespace lidarsurf;
 
@@ -79,6 +84,66 @@ TEST(VertexEvaluator, NoPointsWithinKMaxLeavesTheVertexUndefined) {
     EXPECT_FALSE(evaluate_vertex(g, {0, 0, 0}, c, kSensor).defined);
 }
 
+TEST(VertexEvaluator, ThicknessGuardRejectsAStepAndKeepsANoisyPlane) {
+    // A level's merged statistics of two parallel planes h apart, half the points on each: the
+    // spread across them is sqrt(lambda3) = h / 2 (direct oracle below). The guard at t voxels
+    // rejects it when h / 2 > t * alpha and keeps a single plane with 2 cm noise.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-0.4, 0.4);
+    std::normal_distribution<double> noise(0.0, 0.02);
+    auto stats_of = [&](double h, double sigma) {
+        VoxelStats st;
+        std::vector<Eigen::Vector3d> pts;
+        for (int i = 0; i < 400; ++i) {
+            const Eigen::Vector3d p(u(rng), u(rng), (i % 2 ? h : 0.0) + (sigma > 0 ? noise(rng) : 0.0));
+            st.add(p);
+            pts.push_back(p);
+        }
+        const auto direct = test::direct_stats(pts);
+        return std::make_pair(st, std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(direct.cov).eigenvalues()[0]));
+    };
+    ReconstructionConfig c;  // alpha 0.2, max_thickness 0.6 voxels = 0.12 m
+    const Eigen::Vector3d v(0, 0, 0.1), sensor(0, 0, 5);
+    const auto [step, step_thickness] = stats_of(0.3, 0);
+    EXPECT_NEAR(step_thickness, 0.15, 5e-3);  // h / 2, less a slight tilt the random x, y allow
+    EXPECT_FALSE(evaluate_level(step, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
+    const auto [flat, flat_thickness] = stats_of(0.0, 0.02);
+    EXPECT_LT(flat_thickness, 0.03);
+    EXPECT_TRUE(evaluate_level(flat, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
+    // Off (0), as in the paper: the step is a plane like any other.
+    c.max_thickness = 0;
+    EXPECT_TRUE(evaluate_level(step, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
+    // Just above and below the measured thickness.
+    c.max_thickness = 1.05 * step_thickness / 0.2;
+    EXPECT_TRUE(evaluate_level(step, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
+    c.max_thickness = 0.95 * step_thickness / 0.2;
+    EXPECT_FALSE(evaluate_level(step, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
+}
+
+TEST(Config, PaperTurnsEveryGuardOff) {
+    for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
+        const ReconstructionConfig p = ReconstructionConfig::paper(mode);
+        EXPECT_NO_THROW(p.validate());
+        EXPECT_EQ(p.mode, mode);
+        EXPECT_EQ(p.min_planarity, 0);
+        EXPECT_EQ(p.max_thickness, 0);
+        EXPECT_EQ(p.truncation_voxels, 0);
+        EXPECT_FALSE(p.seeded_surface);
+        EXPECT_FALSE(p.snap_to_plane);
+        EXPECT_EQ(p.min_component_triangles, 0);
+        // The paper's parameters are untouched.
+        EXPECT_EQ(p.voxel_size, 0.2);
+        EXPECT_EQ(p.tau, 0.2);
+        EXPECT_EQ(p.n_min, 10);
+        EXPECT_EQ(p.k_max, 5);
+    }
+    ReconstructionConfig c;
+    c.voxel_size = 0.1;
+    c.make_paper_literal();
+    EXPECT_EQ(c.voxel_size, 0.1);
+    EXPECT_FALSE(c.snap_to_plane);
+}
+
 TEST(Config, ValidateRejectsAbsurdParameters) {
     ReconstructionConfig ok;
     EXPECT_NO_THROW(ok.validate());
@@ -95,6 +160,9 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
     EXPECT_THROW(bad([](auto& c) { c.k_max = 0; }).validate(), InvalidArgument);
     EXPECT_THROW(bad([](auto& c) { c.k_max = 1000; }).validate(), InvalidArgument);
     EXPECT_THROW(bad([](auto& c) { c.k = 0; }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.max_thickness = -0.1; }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.max_thickness = std::nan(""); }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.min_component_triangles = -1; }).validate(), InvalidArgument);
     EXPECT_EQ(parse_mode("AN+GC"), Mode::AdaptiveGaussian);
     EXPECT_EQ(parse_mode("cn"), Mode::Constant);
     EXPECT_THROW(parse_mode("imls"), InvalidArgument);

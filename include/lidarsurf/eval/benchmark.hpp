@@ -7,6 +7,7 @@
 
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/eval/metrics.hpp"
+#include "lidarsurf/eval/true_surface.hpp"
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
@@ -21,9 +22,15 @@ struct BenchmarkMethod {
     ImlsConfig imls_config;
 };
 
-/// Table I's rows with `base`'s other settings: AN+GC and AN with k_max 5 and 3, CN+GC and CN
-/// with k 5, 3 and 1, then IMLS (radius alpha * k_max, k = N_min, h = r / 3).
+/// The default configuration `base` ("default"), then Table I's rows as the paper wrote them
+/// (base with make_paper_literal()): AN+GC and AN with k_max 5 and 3, CN+GC and CN with k 5, 3 and
+/// 1; then IMLS (radius alpha * k_max, k = N_min, h = r / 3).
 std::vector<BenchmarkMethod> table_one_methods(const ReconstructionConfig& base);
+
+/// From the paper's AN+GC to `base`, one guard added per row (planarity; seeded surface with a
+/// sqrt(3) truncation; thickness; base's truncation; snapping), then base with k_max 3 and 7 and
+/// base at half the voxel size with twice k_max (docs/benchmarks.md, the ablation).
+std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base);
 
 /// Reconstructs `cloud` (sensor at `sensor`) with the row's method. `summary` gets one line of
 /// counts and times. Returns the mesh, possibly empty.
@@ -42,6 +49,9 @@ struct MethodAggregate {
     double accuracy = 0, completeness = 0, chamfer_l1 = 0, precision = 0, recall = 0, fscore = 0;
     std::vector<double> curve_delta, curve_share;  ///< mean share per delta over frames (Fig. 6b)
     std::vector<RangeBin> by_range;                ///< AE P->GT per range bin over all vertices (Fig. 6a)
+    /// Against the true scene triangles (when the sequence has them), averaged over truth_frames.
+    std::size_t truth_frames = 0;
+    TrueSurfaceMetrics truth;   ///< samples: total; every other field: mean over frames
 };
 
 struct BenchmarkResult {
@@ -55,7 +65,8 @@ struct BenchmarkResult {
 class BenchmarkAccumulator {
 public:
     explicit BenchmarkAccumulator(std::vector<std::string> method_names);
-    void add(std::size_t method, const EvaluationResult& result, double seconds);
+    /// One frame of one method; `truth` when the frame's true surface is known.
+    void add(std::size_t method, const EvaluationResult& result, double seconds, const TrueSurfaceMetrics* truth = nullptr);
     void add_empty(std::size_t method);
     BenchmarkResult finish(std::string dataset, std::size_t frames) const;
 
@@ -71,6 +82,9 @@ private:
 
 /// Table I's layout (AE and HD: P->GT, GT->P, sym) followed by the surface metrics and times.
 std::string format_table_one(const BenchmarkResult& result);
+/// The true-surface table (error, completeness, precision / recall / F-score, time); empty when
+/// no method has a frame with a known true surface.
+std::string format_true_surface(const BenchmarkResult& result);
 /// One line per method, every averaged scalar.
 std::string to_csv(const BenchmarkResult& result);
 /// Everything, including the curves and the range bins (input of the plotting script).

@@ -14,10 +14,17 @@
 
 namespace lidarsurf {
 
+/// Where a vertex goes on a lattice edge whose ends have opposite signs.
+enum class VertexPlacement {
+    Interpolated,    ///< the zero of the linear interpolation (Lorensen & Cline)
+    SnappedToPlane,  ///< that point moved onto the plane Pi^{k'} of the nearer end (docs/method.md)
+};
+
 /// Meshes every cube of `field` whose 8 corners are defined.
-Mesh extract_mesh(const TsdfField& field);
+Mesh extract_mesh(const TsdfField& field, VertexPlacement placement = VertexPlacement::Interpolated);
 
 /// Meshes only the given cubes (by minimum corner), in the given order.
-Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes);
+Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes,
+                  VertexPlacement placement = VertexPlacement::Interpolated);
 
 }  // namespace lidarsurf

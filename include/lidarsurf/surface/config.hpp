@@ -1,7 +1,9 @@
 #pragma once
-// The one configuration of the reconstruction. Every field carries the paper's default
-// (Sec. IV-A: alpha = 0.2 m, tau = 0.2, N_min = 10, k_max = 5); the CLI and the Python bindings
-// fill this same struct, and validate() is the single place parameters are checked.
+// The one configuration of the reconstruction. The paper's parameters carry the paper's defaults
+// (Sec. IV-A: alpha = 0.2 m, tau = 0.2, N_min = 10, k_max = 5); the guards we add on top of it
+// (planarity, thickness, truncation, seeded surface, snapping) are on by default and measured in
+// docs/benchmarks.md; ReconstructionConfig::paper() turns every one of them off. The CLI and the
+// Python bindings fill this same struct, and validate() is the single place parameters are checked.
 #include <limits>
 #include <string>
 #include <string_view>
@@ -36,10 +38,22 @@ struct ReconstructionConfig {
     /// Degenerate covariance guard: a neighbourhood with lambda2 < min_planarity * lambda1 is a
     /// line (typically a single scan ring), not a plane, and fails like Eq. (1) (docs/method.md).
     double min_planarity = 0.05;
-    /// TSDF truncation, in voxels. The paper names a *truncated* SDF without giving the distance;
-    /// a corner of a cube that the surface crosses is within the cube diagonal (sqrt(3) voxels) of
-    /// it, so vertices with |TSDF| beyond that are left undefined (docs/method.md). 0 disables.
-    double truncation_voxels = 1.7320508075688772;
+    /// Thickness guard: a neighbourhood whose points spread more than this (sqrt(lambda3), in
+    /// voxels) across their plane is not one surface (typically a corner or an object's edge)
+    /// and fails like Eq. (1) (docs/method.md). 0 disables.
+    double max_thickness = 0.6;
+    /// Moves each marching-cubes vertex onto the plane Pi^{k'} of the nearer corner of its edge
+    /// (docs/method.md, "Snapping").
+    bool snap_to_plane = true;
+    /// Drops connected pieces of the mesh with fewer triangles than this (0 keeps all).
+    int min_component_triangles = 0;
+    /// TSDF truncation, in voxels. The paper names a *truncated* SDF without giving the distance.
+    /// Vertices with |TSDF| beyond it are left undefined: about one voxel cuts the planes extended
+    /// past objects while keeping the surface of almost every cube it crosses; the 5 % margin
+    /// keeps both sides of a surface lying exactly on a lattice plane (docs/method.md,
+    /// "Truncation"; the cube diagonal sqrt(3) was the default before the true-surface benchmark).
+    /// 0 disables.
+    double truncation_voxels = 1.05;
     /// Keep only the surface connected to the data: marching-cubes cubes reachable from an
     /// occupied voxel through faces the surface crosses (docs/method.md, "Seeded surface").
     /// false meshes every cube whose corners are defined (the full dilation, paper-literal).
@@ -50,6 +64,12 @@ struct ReconstructionConfig {
     /// Memory budget in MiB: the reconstruction refuses (ResourceLimit, with its estimate) a cloud
     /// whose voxel grid and TSDF would need more (docs/reliability.md, "Memory budget").
     double max_memory_mb = 4096;
+
+    /// The paper's method as written, in `mode`: every guard above off (no planarity or thickness
+    /// guard, no truncation, every cube with defined corners meshed, interpolated vertices).
+    static ReconstructionConfig paper(Mode mode = Mode::AdaptiveGaussian);
+    /// Turns this configuration's guards off as paper() does, keeping its other fields.
+    void make_paper_literal();
 
     /// The truncation in metres (truncation_voxels * voxel_size), infinity when disabled.
     double truncation_distance() const { return truncation_distance_of(truncation_voxels, voxel_size); }
