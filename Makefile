@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz install package-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy install package-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -59,6 +59,17 @@ fuzz:
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_BUILD_FUZZERS=ON -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_TESTS=OFF -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
 	cmake --build $(FUZZ_BUILD) -j $(JOBS)
 	bash scripts/run_fuzzers.sh $(FUZZ_BUILD)/fuzz $(FUZZ_SECONDS)
+
+# The accuracy benchmark against the true scene and the meshers users already have (Open3D from
+# Debian's python3-open3d), docs/benchmarks.md: about 25 minutes for 10 frames on 2 cores.
+ACCURACY_DIR ?= $(BUILD)/accuracy
+ACCURACY_FRAMES ?= 10
+accuracy: build
+	@bash scripts/setup.sh peers
+	$(BUILD)/bin/lidarsurf simulate --scene town --frames $(ACCURACY_FRAMES) -o $(ACCURACY_DIR)/town
+	/usr/bin/python3 scripts/peers_open3d.py $(ACCURACY_DIR)/town
+	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --peers $(ACCURACY_DIR)/town/peers --out $(ACCURACY_DIR)/table
+	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --ablation --no-plots --out $(ACCURACY_DIR)/ablation
 
 # The Python package in the build tree: PYTHONPATH=$(BUILD)/python /usr/bin/python3 -c 'import lidarsurf'
 python: build

@@ -20,9 +20,12 @@ PKGS=(
   python3-numpy python3-pytest
 )
 # `setup.sh fuzz`: also clang and its libFuzzer runtime (make fuzz); `setup.sh tsan`: the tools
-# that fetch and check Debian's oneTBB source (make tsan, scripts/build_tbb_tsan.sh).
+# that fetch and check Debian's oneTBB source (make tsan, scripts/build_tbb_tsan.sh); `setup.sh
+# peers`: Open3D for the accuracy benchmark's peers (make accuracy).
 if [ "${1:-}" = "fuzz" ]; then PKGS+=(clang libclang-rt-14-dev); fi
 if [ "${1:-}" = "tsan" ]; then PKGS+=(curl xz-utils ca-certificates); fi
+# `setup.sh peers`: Open3D, the meshers users already have (make accuracy, scripts/peers_open3d.py).
+if [ "${1:-}" = "peers" ]; then PKGS+=(python3-open3d); fi
 
 missing=()
 for p in "${PKGS[@]}"; do
