@@ -41,11 +41,6 @@ double clipped_mean(const std::vector<double>& d, double clip) {
     return s / static_cast<double>(d.size());
 }
 
-double share_at_most(const std::vector<double>& d, double t) {
-    if (d.empty()) return 0;
-    return static_cast<double>(std::count_if(d.begin(), d.end(), [t](double x) { return x <= t; })) / static_cast<double>(d.size());
-}
-
 // Uniform double in [0, 1) from a 64-bit engine (portable, unlike std::uniform_real_distribution).
 double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
@@ -69,6 +64,19 @@ void EvaluationConfig::validate() const {
     positive(sample_spacing, "sample spacing");
     if (max_samples == 0 || max_samples > 100'000'000) fail("max samples must be in [1, 1e8]");
     if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
+}
+
+double share_at_most(const std::vector<double>& d, double t) {
+    if (d.empty()) return 0;
+    return static_cast<double>(std::count_if(d.begin(), d.end(), [t](double x) { return x <= t; })) / static_cast<double>(d.size());
+}
+
+std::vector<double> distances_to_surface(const MeshDistance& surface, const std::vector<Eigen::Vector3d>& points) {
+    std::vector<double> d(points.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) d[i] = surface.distance(points[i]);
+    });
+    return d;
 }
 
 DirectedError summarize(std::vector<double> d) {
@@ -195,11 +203,7 @@ EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& 
         SurfaceMetrics& sm = res.surface;
         sm.samples = samples.size();
         const std::vector<double> d_s = nearest_distances(samples, gt_tree);
-        const MeshDistance surface(mesh);
-        std::vector<double> d_c(gt.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, gt.size(), 512), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) d_c[i] = surface.distance(gt[i]);
-        });
+        const std::vector<double> d_c = distances_to_surface(MeshDistance(mesh), gt);
         sm.accuracy = clipped_mean(d_s, config.truncation_accuracy);
         sm.completeness = clipped_mean(d_c, config.truncation_completeness);
         sm.chamfer_l1 = 0.5 * (sm.accuracy + sm.completeness);

@@ -1,29 +1,10 @@
 #include "lidarsurf/eval/true_surface.hpp"
 
-#include <algorithm>
-
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
-namespace {
-
-std::vector<double> distances_to(const MeshDistance& surface, const std::vector<Eigen::Vector3d>& points) {
-    std::vector<double> d(points.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) d[i] = surface.distance(points[i]);
-    });
-    return d;
-}
-
-double share_at_most(const std::vector<double>& d, double t) {
-    if (d.empty()) return 0;
-    return static_cast<double>(std::count_if(d.begin(), d.end(), [t](double x) { return x <= t; })) / static_cast<double>(d.size());
-}
-
-}  // namespace
 
 TrueSurfaceMetrics evaluate_true_surface(const Mesh& mesh, const MeshDistance& truth, const std::vector<Eigen::Vector3d>& gt_in,
                                          const EvaluationConfig& config) {
@@ -45,10 +26,10 @@ TrueSurfaceMetrics evaluate_true_surface(const Mesh& mesh, const MeshDistance& t
     TrueSurfaceMetrics m;
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
     arena.execute([&] {
-        const std::vector<double> d_s = distances_to(truth, samples);
-        const std::vector<double> d_v = distances_to(truth, vertices);
+        const std::vector<double> d_s = distances_to_surface(truth, samples);
+        const std::vector<double> d_v = distances_to_surface(truth, vertices);
         const MeshDistance surface(mesh);
-        const std::vector<double> d_c = distances_to(surface, gt);
+        const std::vector<double> d_c = distances_to_surface(surface, gt);
         m.samples = samples.size();
         m.precision = share_at_most(d_s, config.threshold);
         m.recall = share_at_most(d_c, config.threshold);

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/mesh/mesh_distance.hpp"
 
 namespace lidarsurf {
 
@@ -77,6 +78,12 @@ struct EvaluationResult {
 
 /// Error statistics of a set of distances (mean, max, median, p90). Empty input gives zeros.
 DirectedError summarize(std::vector<double> distances);
+
+/// Share of the distances that are <= t (0 for none).
+double share_at_most(const std::vector<double>& distances, double t);
+
+/// Exact distance of every point to the surface (in parallel, in the caller's TBB arena).
+std::vector<double> distances_to_surface(const MeshDistance& surface, const std::vector<Eigen::Vector3d>& points);
 
 /// Points sampled uniformly on the triangles (area-weighted), `spacing` apart on average, at most
 /// `max_samples`; deterministic for a seed. Every triangle of positive area has at least one sample
