@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy install package-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl install package-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -70,6 +70,16 @@ accuracy: build
 	/usr/bin/python3 scripts/peers_open3d.py $(ACCURACY_DIR)/town
 	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --peers $(ACCURACY_DIR)/town/peers --out $(ACCURACY_DIR)/table
 	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --ablation --no-plots --out $(ACCURACY_DIR)/ablation
+
+# PCL's MLS + greedy projection as one more peer (PCL is heavy: its own build directory, not in make
+# test). Run after `make accuracy`, then re-run its benchmark line to get the PCL row.
+PCL_BUILD ?= build-pcl
+accuracy-pcl:
+	@bash scripts/setup.sh pcl
+	cmake -S . -B $(PCL_BUILD) -DCMAKE_BUILD_TYPE=Release -DLIDARSURF_BUILD_PCL_PEER=ON -DLIDARSURF_BUILD_TESTS=OFF -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
+	cmake --build $(PCL_BUILD) -j $(JOBS) --target lidarsurf_pcl_peer
+	$(PCL_BUILD)/bin/lidarsurf_pcl_peer $(ACCURACY_DIR)/town $(ACCURACY_DIR)/town/peers
+	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --methods default --peers $(ACCURACY_DIR)/town/peers --no-plots --out $(ACCURACY_DIR)/table-pcl
 
 # The Python package in the build tree: PYTHONPATH=$(BUILD)/python /usr/bin/python3 -c 'import lidarsurf'
 python: build

@@ -26,6 +26,8 @@ if [ "${1:-}" = "fuzz" ]; then PKGS+=(clang libclang-rt-14-dev); fi
 if [ "${1:-}" = "tsan" ]; then PKGS+=(curl xz-utils ca-certificates); fi
 # `setup.sh peers`: Open3D, the meshers users already have (make accuracy, scripts/peers_open3d.py).
 if [ "${1:-}" = "peers" ]; then PKGS+=(python3-open3d); fi
+# `setup.sh pcl`: PCL for tools/pcl_peer (make accuracy-pcl; about 380 packages).
+if [ "${1:-}" = "pcl" ]; then PKGS+=(libpcl-dev); fi
 
 missing=()
 for p in "${PKGS[@]}"; do
