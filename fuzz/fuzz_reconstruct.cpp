@@ -3,6 +3,7 @@
 // returns a mesh whose vertices are finite, whose faces refer to existing vertices, and whose
 // vertices lie within the data's bounding box grown by the largest neighbourhood (a vertex of
 // the lattice is only defined if H^k(v) holds points, Sec. III-B).
+#include <array>
 #include <cstring>
 #include <vector>
 
@@ -63,6 +64,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     c.seed_dilation = in.u8() % 3;
     c.threads = 1 + in.u8() % 2;
     const std::uint8_t flags = in.u8();
+    // The guards of the default, from the flag byte's upper bits (the input layout is unchanged).
+    c.max_thickness = std::array<double, 4>{0.0, 0.3, 0.6, 1.5}[(flags >> 4) & 3];
+    c.snap_to_plane = (flags & 64) == 0;
+    c.min_component_triangles = (flags & 128) ? 20 : 0;
     const Eigen::Vector3d sensor(static_cast<std::int8_t>(in.u8()) * 0.1, static_cast<std::int8_t>(in.u8()) * 0.1,
                                  static_cast<std::int8_t>(in.u8()) * 0.1);
     const Eigen::Vector3d offset = (flags & 4) ? Eigen::Vector3d(4.0e6, -3.0e6, 1.0e3) : Eigen::Vector3d::Zero();
