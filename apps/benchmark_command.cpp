@@ -1,10 +1,11 @@
-// lidarsurf benchmark: the paper's Table I and Fig. 6 on a sequence in the KITTI layout.
+// lidarsurf benchmark: the paper's Table I and Fig. 6, and the true-surface table (issue 8), on a
+// sequence in the KITTI layout.
 #include <algorithm>
 #include <cstdio>
-#include <map>
-#include <optional>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
@@ -125,7 +126,7 @@ CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
     b->add_option("--out", o.out, "Output directory (default DIR/benchmark)");
     b->add_option("--frames", o.frames, "Use only the first N frames (0 = all)")->capture_default_str();
     b->add_option("--stride", o.stride, "Use every S-th frame")->capture_default_str();
-    b->add_option("--methods", o.methods, "Comma-separated rows to run (default: all of Table I)");
+    b->add_option("--methods", o.methods, "Comma-separated rows to run (default: every row: default, Table I, IMLS; or the ablation)");
     b->add_option("--peers", o.peers, "Also evaluate other tools' meshes: DIR/NAME/NNNNNN.ply (scripts/peers_open3d.py)");
     b->add_option("--max-range", o.max_range, "Evaluate only within this range of the sensor (0 = all)")->capture_default_str();
     b->add_flag("--ablation", o.ablation, "Run the ablation rows (paper AN+GC to the default, one guard at a time) instead of Table I");
