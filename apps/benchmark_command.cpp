@@ -11,7 +11,6 @@
 #include "commands.hpp"
 #include "lidarsurf/eval/benchmark.hpp"
 #include "lidarsurf/eval/metrics.hpp"
-#include "lidarsurf/eval/true_surface.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
@@ -192,9 +191,7 @@ int run_benchmark(const BenchmarkOptions& o) {
         if (has_truth) truth.emplace(true_surface(scene, seq, i, poses[i]));
         auto add = [&](std::size_t row, const Mesh& mesh, double seconds) {
             if (mesh.empty()) return acc.add_empty(row);
-            if (!truth) return acc.add(row, evaluate(mesh, gt.points, ec), seconds);
-            const TrueSurfaceMetrics t = evaluate_true_surface(mesh, *truth, gt.points, ec);
-            acc.add(row, evaluate(mesh, gt.points, ec), seconds, &t);
+            acc.add(row, truth ? evaluate(mesh, gt.points, ec, *truth) : evaluate(mesh, gt.points, ec), seconds);
         };
         for (std::size_t m = 0; m < methods.size(); ++m) {
             const auto t0 = std::chrono::steady_clock::now();

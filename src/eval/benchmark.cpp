@@ -119,7 +119,7 @@ void divide(DirectedError& e, double n) {
 
 }  // namespace
 
-void BenchmarkAccumulator::add(std::size_t i, const EvaluationResult& r, double seconds, const TrueSurfaceMetrics* truth) {
+void BenchmarkAccumulator::add(std::size_t i, const EvaluationResult& r, double seconds) {
     Sum& s = sums_.at(i);
     MethodAggregate& a = s.agg;
     delta_ = r.delta;
@@ -128,7 +128,7 @@ void BenchmarkAccumulator::add(std::size_t i, const EvaluationResult& r, double 
     a.seconds += seconds;
     a.vertices += static_cast<double>(r.mesh_vertices);
     a.triangles += static_cast<double>(r.mesh_triangles);
-    if (truth) {
+    if (const auto& truth = r.truth) {
         ++a.truth_frames;
         a.truth.samples += truth->samples;
         add_directed(a.truth.error, truth->error);

@@ -12,6 +12,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/kd_tree.hpp"
+#include "lidarsurf/eval/true_surface.hpp"
 #include "lidarsurf/mesh/mesh_distance.hpp"
 
 namespace lidarsurf {
@@ -118,7 +119,10 @@ std::vector<Eigen::Vector3d> sample_surface(const Mesh& mesh, double spacing, st
     return out;
 }
 
-EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& gt_in, const EvaluationConfig& config) {
+namespace {
+
+EvaluationResult evaluate_impl(const Mesh& mesh, const std::vector<Eigen::Vector3d>& gt_in, const EvaluationConfig& config,
+                               const MeshDistance* truth) {
     config.validate();
     mesh.check();
     if (mesh.vertices.empty() || mesh.triangles.empty()) throw InvalidInput("the mesh to evaluate has no triangle");
@@ -196,14 +200,15 @@ EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& 
         }
         lo.array() -= config.threshold;
         hi.array() += config.threshold;
-        std::erase_if(samples, [&](const Eigen::Vector3d& p) {
-            if (!in_range(p)) return true;
-            return config.crop_to_gt_box && ((p.array() < lo.array()).any() || (p.array() > hi.array()).any());
-        });
+        std::erase_if(samples, [&](const Eigen::Vector3d& p) { return !in_range(p); });
+        const std::vector<double> d_c = distances_to_surface(MeshDistance(mesh), gt);
+        // The true surface sees every sample in range; protocol 2 only those in the GT box.
+        if (truth) res.truth = true_surface_metrics(samples, vertices, d_c, *truth, config.threshold);
+        if (config.crop_to_gt_box)
+            std::erase_if(samples, [&](const Eigen::Vector3d& p) { return (p.array() < lo.array()).any() || (p.array() > hi.array()).any(); });
         SurfaceMetrics& sm = res.surface;
         sm.samples = samples.size();
         const std::vector<double> d_s = nearest_distances(samples, gt_tree);
-        const std::vector<double> d_c = distances_to_surface(MeshDistance(mesh), gt);
         sm.accuracy = clipped_mean(d_s, config.truncation_accuracy);
         sm.completeness = clipped_mean(d_c, config.truncation_completeness);
         sm.chamfer_l1 = 0.5 * (sm.accuracy + sm.completeness);
@@ -217,6 +222,17 @@ EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& 
         if (in_range(mesh.vertices[t[0]]) || in_range(mesh.vertices[t[1]]) || in_range(mesh.vertices[t[2]])) ++tri;
     res.mesh_triangles = tri;
     return res;
+}
+
+}  // namespace
+
+EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& gt, const EvaluationConfig& config) {
+    return evaluate_impl(mesh, gt, config, nullptr);
+}
+
+EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& gt, const EvaluationConfig& config,
+                          const MeshDistance& truth) {
+    return evaluate_impl(mesh, gt, config, &truth);
 }
 
 }  // namespace lidarsurf

@@ -23,21 +23,21 @@ TrueSurfaceMetrics evaluate_true_surface(const Mesh& mesh, const MeshDistance& t
     if (vertices.empty() || samples.empty()) throw InvalidInput("no part of the mesh lies within the evaluation range");
     if (gt.empty()) throw InvalidInput("no ground-truth point lies within the evaluation range");
 
-    TrueSurfaceMetrics m;
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
-    arena.execute([&] {
-        const std::vector<double> d_s = distances_to_surface(truth, samples);
-        const std::vector<double> d_v = distances_to_surface(truth, vertices);
-        const MeshDistance surface(mesh);
-        const std::vector<double> d_c = distances_to_surface(surface, gt);
-        m.samples = samples.size();
-        m.precision = share_at_most(d_s, config.threshold);
-        m.recall = share_at_most(d_c, config.threshold);
-        m.fscore = m.precision + m.recall > 0 ? 2 * m.precision * m.recall / (m.precision + m.recall) : 0.0;
-        m.error = summarize(d_s);
-        m.vertex_error = summarize(d_v);
-        m.completeness = summarize(d_c);
-    });
+    return arena.execute([&] { return true_surface_metrics(samples, vertices, distances_to_surface(MeshDistance(mesh), gt), truth, config.threshold); });
+}
+
+TrueSurfaceMetrics true_surface_metrics(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& vertices,
+                                        const std::vector<double>& gt_to_mesh, const MeshDistance& truth, double threshold) {
+    const std::vector<double> d_s = distances_to_surface(truth, samples);
+    TrueSurfaceMetrics m;
+    m.samples = samples.size();
+    m.precision = share_at_most(d_s, threshold);
+    m.recall = share_at_most(gt_to_mesh, threshold);
+    m.fscore = m.precision + m.recall > 0 ? 2 * m.precision * m.recall / (m.precision + m.recall) : 0.0;
+    m.error = summarize(d_s);
+    m.vertex_error = summarize(distances_to_surface(truth, vertices));
+    m.completeness = summarize(gt_to_mesh);
     return m;
 }
 

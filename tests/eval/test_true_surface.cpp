@@ -65,6 +65,28 @@ TEST(TrueSurface, HalfAMeshHasHalfTheRecallAndFullPrecision) {
     EXPECT_NEAR(m.completeness.max, 1.99, 1e-9);
 }
 
+TEST(TrueSurface, EvaluateGivesTheSameMetricsFromItsOwnSamples) {
+    // evaluate(..., truth) reuses protocol 2's samples and GT-to-mesh distances: same numbers as
+    // the stand-alone evaluation (sums may differ in the last bits by order).
+    const MeshDistance surface(square(0, 4, 0));
+    const Mesh half = square(0, 2, 0.05);
+    EvaluationConfig c;
+    c.max_range = 3.0;
+    const TrueSurfaceMetrics a = evaluate_true_surface(half, surface, gt_points(), c);
+    const EvaluationResult r = evaluate(half, gt_points(), c, surface);
+    ASSERT_TRUE(r.truth.has_value());
+    EXPECT_FALSE(evaluate(half, gt_points(), c).truth.has_value());
+    const TrueSurfaceMetrics& b = *r.truth;
+    EXPECT_EQ(a.samples, b.samples);
+    EXPECT_NEAR(a.error.mean, b.error.mean, 1e-12);
+    EXPECT_NEAR(a.vertex_error.mean, b.vertex_error.mean, 1e-12);
+    EXPECT_NEAR(a.completeness.mean, b.completeness.mean, 1e-12);
+    EXPECT_NEAR(a.completeness.p90, b.completeness.p90, 1e-12);
+    EXPECT_DOUBLE_EQ(a.precision, b.precision);
+    EXPECT_DOUBLE_EQ(a.recall, b.recall);
+    EXPECT_DOUBLE_EQ(a.fscore, b.fscore);
+}
+
 TEST(TrueSurface, RangeCropAndBadInput) {
     const MeshDistance surface(square(0, 4, 0));
     EvaluationConfig c;

@@ -7,7 +7,6 @@
 
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/eval/metrics.hpp"
-#include "lidarsurf/eval/true_surface.hpp"
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
@@ -65,8 +64,8 @@ struct BenchmarkResult {
 class BenchmarkAccumulator {
 public:
     explicit BenchmarkAccumulator(std::vector<std::string> method_names);
-    /// One frame of one method; `truth` when the frame's true surface is known.
-    void add(std::size_t method, const EvaluationResult& result, double seconds, const TrueSurfaceMetrics* truth = nullptr);
+    /// One frame of one method (its true-surface metrics too, when result.truth has them).
+    void add(std::size_t method, const EvaluationResult& result, double seconds);
     void add_empty(std::size_t method);
     BenchmarkResult finish(std::string dataset, std::size_t frames) const;
 

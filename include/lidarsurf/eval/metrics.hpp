@@ -7,6 +7,7 @@
 //    points sampled on the triangles; accuracy (mesh->GT), completeness (GT->mesh surface),
 //    Chamfer-L1, precision / recall / F-score at a threshold, with truncated distances.
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -69,11 +70,22 @@ struct SurfaceMetrics {
     DirectedError gt_to_surface;   ///< unclipped GT -> surface distances
 };
 
+struct TrueSurfaceMetrics {
+    std::size_t samples = 0;      ///< mesh surface samples within the range crop
+    DirectedError error;          ///< samples -> true surface (unclipped)
+    DirectedError vertex_error;   ///< vertices -> true surface (unclipped)
+    DirectedError completeness;   ///< GT points -> mesh surface (unclipped)
+    double precision = 0;         ///< share of samples within the threshold of the true surface
+    double recall = 0;            ///< share of GT points within the threshold of the mesh
+    double fscore = 0;            ///< 2 P R / (P + R)
+};
+
 struct EvaluationResult {
     std::size_t mesh_vertices = 0, mesh_triangles = 0, gt_points = 0;  ///< after the range crop
     double threshold = 0, delta = 0;
     VertexMetrics vertex;
     SurfaceMetrics surface;
+    std::optional<TrueSurfaceMetrics> truth;  ///< when evaluate() was given the true surface
 };
 
 /// Error statistics of a set of distances (mean, max, median, p90). Empty input gives zeros.
@@ -94,5 +106,9 @@ std::vector<Eigen::Vector3d> sample_surface(const Mesh& mesh, double spacing, st
 /// or when nothing of the mesh or of the GT remains after the range crop; non-finite GT points are
 /// rejected (InvalidInput).
 EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& gt, const EvaluationConfig& config);
+/// The same, plus the true-surface metrics against `truth` (same frame; eval/true_surface.hpp),
+/// from the same mesh samples and GT-to-mesh distances.
+EvaluationResult evaluate(const Mesh& mesh, const std::vector<Eigen::Vector3d>& gt, const EvaluationConfig& config,
+                          const MeshDistance& truth);
 
 }  // namespace lidarsurf

@@ -17,21 +17,17 @@
 
 namespace lidarsurf {
 
-struct TrueSurfaceMetrics {
-    std::size_t samples = 0;      ///< mesh surface samples within the range crop
-    DirectedError error;          ///< samples -> true surface (unclipped)
-    DirectedError vertex_error;   ///< vertices -> true surface (unclipped)
-    DirectedError completeness;   ///< GT points -> mesh surface (unclipped)
-    double precision = 0;         ///< share of samples within the threshold of the true surface
-    double recall = 0;            ///< share of GT points within the threshold of the mesh
-    double fscore = 0;            ///< 2 P R / (P + R)
-};
-
 /// Evaluates `mesh` against the true surface `truth` (same frame) and the noise-free GT points
 /// `gt`, which sample the part of the true surface the sensor could see (completeness). Uses the
 /// range crop, threshold, sample spacing, seed and threads of `config`. Throws InvalidInput when
 /// the mesh has no triangle or nothing remains after the crop.
 TrueSurfaceMetrics evaluate_true_surface(const Mesh& mesh, const MeshDistance& truth, const std::vector<Eigen::Vector3d>& gt,
                                          const EvaluationConfig& config);
+
+/// The metrics from what evaluate() has already computed (same frame as `truth`): the mesh
+/// samples and vertices within the range crop, and the distances of the cropped GT points to the
+/// mesh surface. Shared by evaluate_true_surface() and evaluate(..., truth).
+TrueSurfaceMetrics true_surface_metrics(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& vertices,
+                                        const std::vector<double>& gt_to_mesh, const MeshDistance& truth, double threshold);
 
 }  // namespace lidarsurf
