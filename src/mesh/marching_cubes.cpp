@@ -1,8 +1,12 @@
 #include "lidarsurf/mesh/marching_cubes.hpp"
 
+#include <algorithm>
 #include <array>
+#include <memory>
 
 #include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "lidarsurf/core/block_map.hpp"
 
@@ -122,6 +126,14 @@ public:
     }
 
     Mesh take() { return std::move(mesh_); }
+    const Mesh& mesh() const { return mesh_; }
+    /// Lattice identity of each mesh vertex, in creation order (axis 4: a loop centroid).
+    const std::vector<VertexId>& vertex_ids() const { return vertex_ids_; }
+    /// Mesh index of the vertex with identity `id`, or kNone.
+    std::uint32_t find(const VertexId& id) const {
+        const WeldSlots* slots = ids_.find(id.base);
+        return slots ? (*slots)[static_cast<std::size_t>(id.axis)] : kNone;
+    }
 
 private:
     // Fans the loop from a vertex none of whose chords joins two edges of a common cube face.
@@ -139,6 +151,7 @@ private:
             return;
         }
         const auto c = static_cast<std::uint32_t>(mesh_.vertices.size());
+        vertex_ids_.push_back({VoxelKey::Zero(), 4});
         Eigen::Vector3d p = Eigen::Vector3d::Zero();
         Eigen::Vector3f n = Eigen::Vector3f::Zero();
         float conf = 0;
@@ -165,6 +178,7 @@ private:
         std::uint32_t& slot = ids_[id.base][static_cast<std::size_t>(id.axis)];
         if (slot != kNone) return slot;
         slot = static_cast<std::uint32_t>(mesh_.vertices.size());
+        vertex_ids_.push_back(id);
 
         const double tc = id.axis == 3 ? (t <= 0 ? 0.0 : 1.0) : t;
         const Eigen::Vector3d pa = a.cast<double>() * field_.voxel_size, pb = b.cast<double>() * field_.voxel_size;
@@ -198,6 +212,7 @@ private:
     Mesh mesh_;
     TsdfField::Accessor lookup_;
     BlockMap<WeldSlots> ids_{WeldSlots{kNone, kNone, kNone, kNone}};
+    std::vector<VertexId> vertex_ids_;
 };
 
 }  // namespace
@@ -211,9 +226,75 @@ Mesh extract_mesh(const TsdfField& field, VertexPlacement placement) {
 }
 
 Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, VertexPlacement placement) {
-    MeshBuilder builder(field, placement);
-    for (const VoxelKey& v : cubes) builder.process_cube(v);
-    return builder.take();
+    // In parallel over runs of cubes that start at a new z (the runs of a (z, y, x)-sorted list).
+    // Two runs share only vertices on the plane z = z0 where the later one starts, and only with
+    // the run just before it (which ends below z0). Each run is meshed with its own welding table;
+    // joining them in order, a vertex of run c on that plane that run c - 1 created is replaced by
+    // run c - 1's, every other vertex is new. That is exactly what one pass over all the cubes
+    // creates, in the same order: the mesh is the serial one, whatever the number of threads.
+    const bool z_sorted = std::is_sorted(cubes.begin(), cubes.end(), [](const VoxelKey& a, const VoxelKey& b) { return a.z() < b.z(); });
+    const std::size_t max_runs = 4 * static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+    const std::size_t wanted = std::min(max_runs, cubes.size() / 4096);
+    std::vector<std::size_t> starts{0};
+    if (z_sorted)
+        for (std::size_t r = 1; r < wanted; ++r) {
+            std::size_t at = std::max(starts.back() + 1, cubes.size() * r / wanted);
+            while (at < cubes.size() && cubes[at].z() == cubes[at - 1].z()) ++at;
+            if (at >= cubes.size()) break;
+            starts.push_back(at);
+        }
+    starts.push_back(cubes.size());
+    const std::size_t runs = starts.size() - 1;
+    if (runs == 1) {
+        MeshBuilder builder(field, placement);
+        for (const VoxelKey& v : cubes) builder.process_cube(v);
+        return builder.take();
+    }
+    std::vector<std::unique_ptr<MeshBuilder>> builders(runs);
+    tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
+        builders[r] = std::make_unique<MeshBuilder>(field, placement);
+        for (std::size_t i = starts[r]; i < starts[r + 1]; ++i) builders[r]->process_cube(cubes[i]);
+    });
+    // Global index of each run's vertices, and where each run's new vertices and triangles go.
+    std::vector<std::vector<std::uint32_t>> global(runs);
+    std::vector<std::size_t> vertex_base(runs + 1, 0), triangle_base(runs + 1, 0);
+    for (std::size_t r = 0; r < runs; ++r) {
+        const std::vector<VertexId>& ids = builders[r]->vertex_ids();
+        const int z0 = cubes[starts[r]].z();
+        const bool touches_previous = r > 0 && cubes[starts[r] - 1].z() == z0 - 1;
+        std::uint32_t next = static_cast<std::uint32_t>(vertex_base[r]);
+        global[r].resize(ids.size());
+        for (std::size_t i = 0; i < ids.size(); ++i) {
+            std::uint32_t shared = kNone;
+            if (touches_previous && ids[i].axis != 2 && ids[i].axis != 4 && ids[i].base.z() == z0) {
+                const std::uint32_t j = builders[r - 1]->find(ids[i]);
+                if (j != kNone) shared = global[r - 1][j];
+            }
+            global[r][i] = shared != kNone ? shared : next++;
+        }
+        vertex_base[r + 1] = next;
+        triangle_base[r + 1] = triangle_base[r] + builders[r]->mesh().triangles.size();
+    }
+    Mesh out;
+    out.vertices.resize(vertex_base[runs]);
+    out.normals.resize(vertex_base[runs]);
+    out.levels.resize(vertex_base[runs]);
+    out.confidence.resize(vertex_base[runs]);
+    out.triangles.resize(triangle_base[runs]);
+    tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
+        const Mesh& m = builders[r]->mesh();
+        for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+            const std::uint32_t g = global[r][i];
+            if (g < vertex_base[r]) continue;  // the previous run's vertex
+            out.vertices[g] = m.vertices[i];
+            out.normals[g] = m.normals[i];
+            out.levels[g] = m.levels[i];
+            out.confidence[g] = m.confidence[i];
+        }
+        for (std::size_t t = 0; t < m.triangles.size(); ++t)
+            for (int k = 0; k < 3; ++k) out.triangles[triangle_base[r] + t][static_cast<std::size_t>(k)] = global[r][m.triangles[t][static_cast<std::size_t>(k)]];
+    });
+    return out;
 }
 
 }  // namespace lidarsurf

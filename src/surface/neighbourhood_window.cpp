@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 
+#include "lidarsurf/core/block_mask.hpp"
 
 namespace lidarsurf {
 
@@ -15,17 +16,6 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
     s.scatter = s2 - s1 * d.transpose();  // sum (x-p)(x-p)^T - n d d^T = sum (x-mu)(x-mu)^T
     return s;
 }
-
-namespace {
-
-// Bits x0..x1 of each of the rows y0..y1 of an 8x8 layer (bit x + 8 y), 0 <= x0 <= x1 < 8.
-std::uint64_t layer_mask(int x0, int x1, int y0, int y1) {
-    const std::uint64_t row = (0xffu >> (7 - (x1 - x0))) << x0;
-    const std::uint64_t rows = (~std::uint64_t{0} >> (8 * (7 - (y1 - y0)))) << (8 * y0);  // bytes y0..y1
-    return (row * 0x0101010101010101ull) & rows;
-}
-
-}  // namespace
 
 NeighbourhoodWindow::NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& vertex_block, int max_level)
     : stats_(grid.stats().data()), alpha_(grid.voxel_size()) {

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
 
@@ -39,74 +40,98 @@ bool zyx_less(const VoxelKey& a, const VoxelKey& b) {
     return a.x() < b.x();
 }
 
-// The search over cubes, independent of how vertex values are obtained. `lookup(v)` returns the
-// sample of a vertex (nullptr if undefined); `prepare(cubes)` is called before a wave of cubes
-// is examined, so that a lazy implementation can evaluate their corners first.
-template <typename Lookup, typename Prepare>
-std::vector<VoxelKey> search(const VoxelGrid& grid, int dilation, Lookup&& lookup, Prepare&& prepare) {
-    BlockMap<std::uint8_t> visited(0);
-    visited.reserve_blocks(grid.index().block_count() * 2);
-    BlockMap<std::uint8_t>::WriteAccessor seen_of(visited);
-    std::vector<VoxelKey> wave, next, active;
-    auto visit = [&](const VoxelKey& cube, std::vector<VoxelKey>& out) {
-        std::uint8_t& seen = seen_of[cube];
+// What one cube of a wave tells the search, given `lookup(v)`, the sample of vertex v (nullptr if
+// undefined): active(cube) when the surface crosses it, and next(c) for each cube it leads to,
+// through each face the surface crosses. A surface through a seed's corner (|value| <= eps, e.g.
+// data lying on a lattice plane) may cross only the neighbouring cubes (zero counts as
+// positive): when `seeding`, the 8 cubes around such a corner are next as well.
+template <typename Lookup, typename Active, typename Next>
+void classify_cube(const VoxelKey& cube, bool seeding, double eps, Lookup&& lookup, Active&& active, Next&& next) {
+    std::array<const VertexSample*, 8> s{};
+    int negatives = 0;
+    for (int c = 0; c < 8; ++c) {
+        s[c] = lookup(corner(cube, c));
+        if (!s[c]) return;
+        negatives += s[c]->tsdf < 0;
+    }
+    if (negatives == 0 || negatives == 8) {
+        if (!seeding) return;
+        for (int c = 0; c < 8; ++c) {
+            if (!(std::fabs(s[c]->tsdf) <= eps)) continue;
+            const VoxelKey v = corner(cube, c);
+            for (int n = 0; n < 8; ++n) next(v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1));  // the 8 cubes around v
+        }
+        return;
+    }
+    active(cube);
+    for (const Face& f : faces()) {
+        int neg = 0;
+        for (int c : f.corners) neg += s[c]->tsdf < 0;
+        if (neg != 0 && neg != 4) next(cube + f.step);
+    }
+}
+
+// The breadth-first search over cubes, independent of how vertex values are obtained.
+class CubeSearch {
+public:
+    explicit CubeSearch(const VoxelGrid& grid) : eps_(1e-6 * grid.voxel_size()), seen_of_(visited_) {
+        visited_.reserve_blocks(grid.index().block_count() * 2);
+    }
+    double eps() const { return eps_; }
+    BlockMap<std::uint8_t>& visited() { return visited_; }
+    std::vector<VoxelKey>& wave() { return wave_; }
+    std::vector<VoxelKey>& active() { return active_; }
+
+    /// Adds `cube` to `out` unless it was visited before.
+    void visit(const VoxelKey& cube, std::vector<VoxelKey>& out) {
+        std::uint8_t& seen = seen_of_[cube];
         if (!seen) {
             seen = 1;
             out.push_back(cube);
         }
-    };
-    for (const VoxelKey& k : grid.keys())
-        for (int z = -dilation; z <= dilation; ++z)
-            for (int y = -dilation; y <= dilation; ++y)
-                for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave);
-    // A surface through a seed's corner (|value| <= eps, e.g. data lying on a lattice plane) may
-    // cross only the neighbouring cubes (zero counts as positive): they become seeds too.
-    const double eps = 1e-6 * grid.voxel_size();
-    bool seeding = true;
-    while (!wave.empty()) {
-        prepare(wave);
-        next.clear();
-        for (const VoxelKey& cube : wave) {
-            std::array<const VertexSample*, 8> s{};
-            bool all = true;
-            int negatives = 0;
-            for (int c = 0; c < 8 && all; ++c) {
-                s[c] = lookup(corner(cube, c));
-                all = s[c] != nullptr;
-                if (all) negatives += s[c]->tsdf < 0;
-            }
-            if (!all) continue;
-            if (negatives == 0 || negatives == 8) {
-                if (!seeding) continue;
-                for (int c = 0; c < 8; ++c) {
-                    if (!(std::fabs(s[c]->tsdf) <= eps)) continue;
-                    const VoxelKey v = corner(cube, c);
-                    for (int n = 0; n < 8; ++n) visit(v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1), next);  // the 8 cubes around v
-                }
-                continue;
-            }
-            active.push_back(cube);
-            for (const Face& f : faces()) {
-                int neg = 0;
-                for (int c : f.corners) neg += s[c]->tsdf < 0;
-                if (neg == 0 || neg == 4) continue;
-                visit(cube + f.step, next);
-            }
-        }
-        std::swap(wave, next);
-        seeding = false;
     }
-    // Which cubes are reached does not depend on the order of the waves; the sort makes the
-    // output (and so the mesh's vertex and triangle order) deterministic.
-    std::sort(active.begin(), active.end(), zyx_less);
-    return active;
-}
+    /// The seeds, one by one: the cubes within `dilation` of an occupied voxel.
+    void seed(const VoxelGrid& grid, int dilation) {
+        for (const VoxelKey& k : grid.keys())
+            for (int z = -dilation; z <= dilation; ++z)
+                for (int y = -dilation; y <= dilation; ++y)
+                    for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
+    }
+    /// Runs the waves from wave(); `prepare(cubes)` is called before a wave of cubes is examined,
+    /// so that a lazy implementation can evaluate their corners first. Returns the active cubes.
+    template <typename Lookup, typename Prepare>
+    std::vector<VoxelKey> run(bool seeding, Lookup&& lookup, Prepare&& prepare) {
+        std::vector<VoxelKey> next;
+        while (!wave_.empty()) {
+            prepare(wave_);
+            next.clear();
+            for (const VoxelKey& cube : wave_)
+                classify_cube(
+                    cube, seeding, eps_, lookup, [&](const VoxelKey& c) { active_.push_back(c); },
+                    [&](const VoxelKey& c) { visit(c, next); });
+            std::swap(wave_, next);
+            seeding = false;
+        }
+        // Which cubes are reached does not depend on the order of the waves; the sort makes the
+        // output (and so the mesh's vertex and triangle order) deterministic.
+        std::sort(active_.begin(), active_.end(), zyx_less);
+        return std::move(active_);
+    }
+
+private:
+    double eps_;
+    BlockMap<std::uint8_t> visited_{0};
+    BlockMap<std::uint8_t>::WriteAccessor seen_of_;
+    std::vector<VoxelKey> wave_, active_;
+};
 
 }  // namespace
 
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation) {
     TsdfField::Accessor values(field);
-    return search(grid, dilation, [&](const VoxelKey& v) { return values.find(v); }, [](const std::vector<VoxelKey>&) {});
+    CubeSearch search(grid);
+    search.seed(grid, dilation);
+    return search.run(true, [&](const VoxelKey& v) { return values.find(v); }, [](const std::vector<VoxelKey>&) {});
 }
 
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
@@ -127,19 +152,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     std::vector<std::vector<std::uint16_t>> pending;
     std::vector<std::uint32_t> pending_blocks;
     std::vector<std::size_t> pending_base;
-    Slots::WriteAccessor slot_of(slots);
-    auto prepare = [&](const std::vector<VoxelKey>& cubes) {
-        for (const VoxelKey& cube : cubes)
-            for (int c = 0; c < 8; ++c) {
-                const VoxelKey v = corner(cube, c);
-                std::int32_t& slot = slot_of[v];
-                if (slot != kUnevaluated) continue;
-                slot = kQueued;
-                const std::uint32_t bi = slot_of.block_index();
-                if (bi >= pending.size()) pending.resize(slots.block_count());
-                if (pending[bi].empty()) pending_blocks.push_back(bi);
-                pending[bi].push_back(static_cast<std::uint16_t>(Slots::offset_of(v)));
-            }
+    // Evaluates the pending vertices, in parallel per vertex block.
+    auto evaluate_pending = [&] {
         pending_base.resize(pending_blocks.size());
         std::size_t total = samples.size();
         for (std::size_t i = 0; i < pending_blocks.size(); ++i) {
@@ -164,32 +178,115 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                     block[offset] = s.defined ? static_cast<std::int32_t>(at) : kUndefined;
                     ++at;
                 }
+                pending[bi].clear();
             }
         });
-        for (std::uint32_t bi : pending_blocks) pending[bi].clear();
         pending_blocks.clear();
     };
-    Slots::Accessor values(slots);
-    auto lookup = [&](const VoxelKey& v) -> const VertexSample* {
+    auto lookup_in = [&](Slots::Accessor& values, const VoxelKey& v) -> const VertexSample* {
         const std::int32_t* slot = values.find(v);
         return slot && *slot >= 0 ? &samples[static_cast<std::size_t>(*slot)] : nullptr;
     };
+    CubeSearch search(grid);
+
+    // Wave 0, the seeds, in parallel per block (three quarters of the vertices on a lidar frame):
+    // the seed cubes are the occupied voxels dilated by [-d, d], so their corners are the occupied
+    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing).
+    const int d = config.seed_dilation;
+    {
+        const std::vector<VoxelKey> blocks = blocks_near_occupancy(grid, -d, d + 1);
+        std::vector<BlockMask> masks(blocks.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) masks[i] = dilated_occupancy(grid, blocks[i], -d, d + 1);
+        });
+        std::vector<std::size_t> nonempty;
+        for (std::size_t i = 0; i < blocks.size(); ++i)
+            if (popcount(masks[i]) > 0) {
+                nonempty.push_back(i);
+                pending_blocks.push_back(slots.block_index(blocks[i]));
+            }
+        pending.resize(slots.block_count());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nonempty.size(), 16), [&](const auto& r) {
+            for (std::size_t j = r.begin(); j != r.end(); ++j) {
+                std::vector<std::uint16_t>& list = pending[pending_blocks[j]];
+                list.reserve(static_cast<std::size_t>(popcount(masks[nonempty[j]])));
+                for_each_bit(masks[nonempty[j]], [&](int offset) { list.push_back(static_cast<std::uint16_t>(offset)); });
+            }
+        });
+        evaluate_pending();
+    }
+    {
+        const std::vector<VoxelKey> blocks = blocks_near_occupancy(grid, -d, d);
+        std::vector<BlockMask> masks(blocks.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) masks[i] = dilated_occupancy(grid, blocks[i], -d, d);
+        });
+        std::vector<std::uint32_t> visited_block(blocks.size());
+        for (std::size_t i = 0; i < blocks.size(); ++i)
+            if (popcount(masks[i]) > 0) visited_block[i] = search.visited().block_index(blocks[i]);
+        // Per seed block, in parallel: mark its seeds visited (its own visited block) and classify
+        // them; the cubes they lead to are then visited serially, in block order.
+        std::vector<std::vector<VoxelKey>> active(blocks.size()), next(blocks.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 8), [&](const auto& r) {
+            Slots::Accessor values(slots);
+            auto lookup = [&](const VoxelKey& v) { return lookup_in(values, v); };
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                if (popcount(masks[i]) == 0) continue;
+                BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(visited_block[i]);
+                for_each_bit(masks[i], [&](int offset) {
+                    seen[static_cast<std::size_t>(offset)] = 1;
+                    classify_cube(
+                        Slots::key_at(blocks[i], offset), true, search.eps(), lookup,
+                        [&](const VoxelKey& c) { active[i].push_back(c); }, [&](const VoxelKey& c) { next[i].push_back(c); });
+                });
+            }
+        });
+        for (std::size_t i = 0; i < blocks.size(); ++i) {
+            search.active().insert(search.active().end(), active[i].begin(), active[i].end());
+            for (const VoxelKey& c : next[i]) search.visit(c, search.wave());
+        }
+    }
+    // The later waves (a quarter of the vertices): queue each cube's unevaluated corners, then
+    // evaluate them in parallel per block.
+    Slots::WriteAccessor slot_of(slots);
+    auto prepare = [&](const std::vector<VoxelKey>& cubes) {
+        for (const VoxelKey& cube : cubes)
+            for (int c = 0; c < 8; ++c) {
+                const VoxelKey v = corner(cube, c);
+                std::int32_t& slot = slot_of[v];
+                if (slot != kUnevaluated) continue;
+                slot = kQueued;
+                const std::uint32_t bi = slot_of.block_index();
+                if (bi >= pending.size()) pending.resize(slots.block_count());
+                if (pending[bi].empty()) pending_blocks.push_back(bi);
+                pending[bi].push_back(static_cast<std::uint16_t>(Slots::offset_of(v)));
+            }
+        evaluate_pending();
+    };
+    Slots::Accessor values(slots);
     SeededTsdf out;
-    out.cubes = search(grid, config.seed_dilation, lookup, prepare);
+    out.cubes = search.run(false, [&](const VoxelKey& v) { return lookup_in(values, v); }, prepare);
     out.evaluated = samples.size();
+
     // The field: the defined evaluated vertices, in evaluation order (deterministic: the waves
     // and the grouping by block do not depend on the thread count).
+    std::vector<std::int32_t> position(samples.size(), kUndefined);
     std::size_t defined = 0;
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-        if (!samples[i].defined) continue;
-        slot_of[keys[i]] = static_cast<std::int32_t>(defined);
-        keys[defined] = keys[i];
-        samples[defined] = samples[i];
-        ++defined;
-    }
-    keys.resize(defined);
-    samples.resize(defined);
-    out.field = TsdfField(std::move(slots), std::move(keys), std::move(samples), grid.voxel_size(), grid.origin());
+    for (std::size_t i = 0; i < samples.size(); ++i)
+        if (samples[i].defined) position[i] = static_cast<std::int32_t>(defined++);
+    std::vector<VoxelKey> field_keys(defined);
+    std::vector<VertexSample> field_samples(defined);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.block_count(), 16), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b != r.end(); ++b)
+            for (std::int32_t& slot : slots.block_at(b))
+                if (slot >= 0) {
+                    const auto i = static_cast<std::size_t>(slot);
+                    slot = position[i];
+                    field_keys[static_cast<std::size_t>(slot)] = keys[i];
+                    field_samples[static_cast<std::size_t>(slot)] = samples[i];
+                }
+    });
+    out.field = TsdfField(std::move(slots), std::move(field_keys), std::move(field_samples), grid.voxel_size(), grid.origin());
     return out;
 }
 

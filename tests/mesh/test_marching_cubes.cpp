@@ -4,6 +4,8 @@
 #include <functional>
 #include <random>
 
+#include <tbb/task_arena.h>
+
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "test_util.hpp"
 
@@ -148,3 +150,58 @@ TEST(MarchingCubes, CubesWithAnUndefinedCornerAreSkipped) {
 }
 
 }  // namespace
+
+// The cube list is meshed in parallel runs (one welding table each, joined in order); the result
+// must not depend on the number of runs (set by the thread count): the same vertices and
+// triangles in the same order, a closed welded sphere, and the same geometry as one serial pass
+// (a list that is not sorted by z is meshed in one run).
+TEST(MarchingCubes, ParallelRunsGiveTheSerialMeshWhateverTheThreadCount) {
+    const double alpha = 0.1, r = 4.1;
+    const Eigen::Vector3d centre(0.013, -0.021, 0.007);
+    TsdfField field;
+    field.voxel_size = alpha;
+    std::vector<VoxelKey> cubes;
+    const int half = 43;
+    for (int z = -half; z <= half; ++z)
+        for (int y = -half; y <= half; ++y)
+            for (int x = -half; x <= half; ++x) {
+                const Eigen::Vector3d p = alpha * Eigen::Vector3d(x, y, z);
+                const double f = (p - centre).norm() - r;
+                if (std::fabs(f) > 2 * alpha) continue;  // a narrow band around the sphere
+                VertexSample s;
+                s.defined = true;
+                s.tsdf = static_cast<float>(f);
+                s.level = 1;
+                s.normal = (p - centre).normalized().cast<float>();
+                field.insert({x, y, z}, s);
+                cubes.emplace_back(x, y, z);  // (z, y, x) order
+            }
+    ASSERT_GT(cubes.size(), 8u * 4096u);  // enough for several runs per thread
+    auto mesh_with = [&](int threads, const std::vector<VoxelKey>& list) {
+        tbb::task_arena arena(threads);
+        Mesh m;
+        arena.execute([&] { m = extract_mesh(field, list); });
+        return m;
+    };
+    const Mesh one = mesh_with(1, cubes);
+    const auto topo = test::topology(one);
+    EXPECT_EQ(topo.boundary_edges, 0u);
+    EXPECT_EQ(topo.nonmanifold_edges, 0u);
+    EXPECT_EQ(topo.euler, 2);
+    for (int threads : {2, 3}) {
+        const Mesh m = mesh_with(threads, cubes);
+        ASSERT_EQ(m.vertices.size(), one.vertices.size()) << threads;
+        ASSERT_EQ(m.triangles.size(), one.triangles.size()) << threads;
+        for (std::size_t i = 0; i < m.vertices.size(); ++i) ASSERT_EQ(m.vertices[i], one.vertices[i]) << threads;
+        for (std::size_t i = 0; i < m.triangles.size(); ++i) ASSERT_EQ(m.triangles[i], one.triangles[i]) << threads;
+    }
+    std::vector<VoxelKey> reversed(cubes.rbegin(), cubes.rend());
+    const Mesh serial = mesh_with(2, reversed);
+    ASSERT_EQ(serial.vertices.size(), one.vertices.size());
+    ASSERT_EQ(serial.triangles.size(), one.triangles.size());
+    auto sorted = [](std::vector<Eigen::Vector3d> v) {
+        std::sort(v.begin(), v.end(), [](const auto& a, const auto& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); });
+        return v;
+    };
+    EXPECT_EQ(sorted(serial.vertices), sorted(one.vertices));
+}

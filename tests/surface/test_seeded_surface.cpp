@@ -106,6 +106,23 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
     }
 }
 
+// Seeds dilated by d cubes: the fast path finds the seeds' corners per block (occupancy dilated
+// by [-d, d + 1], across block borders when d + 1 > 8 - 1) and still gives the reference mesh.
+TEST(SeededSurface, FastPathGivesTheReferenceMeshWithDilatedSeeds) {
+    const Eigen::Vector3d origin(1.0, -2.0, 0.3);
+    const PointCloud cloud = sim::simulate_scan(offroad(), sim::SensorModel::hdl64(), origin, 5);
+    for (int dilation : {1, 8}) {
+        ReconstructionConfig c;
+        c.seed_dilation = dilation;
+        Reconstructor fast(c, origin), reference(c, origin);
+        fast.integrate(cloud);
+        reference.integrate(cloud);
+        const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
+        ASSERT_GT(a.triangles.size(), 1000u) << dilation;
+        expect_same_mesh(a, b, "seed dilation " + std::to_string(dilation));
+    }
+}
+
 // A simulated HDL-64 frame of the procedural town (the benchmark's scene): the fast path's
 // windowed sums and closed-form eigen solver give the reference mesh on a real-size scan too.
 TEST(SeededSurface, FastPathGivesTheReferenceMeshOnATownFrame) {
