@@ -48,15 +48,10 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
     summary_.points_read += points.size();
     constexpr std::size_t kChunk = 1 << 16;  // the budget is checked between chunks
     const std::size_t before = grid_.memory_bytes();
+    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
         const std::size_t end = std::min(points.size(), begin + kChunk);
-        for (std::size_t i = begin; i < end; ++i) {
-            if (!points[i].allFinite()) {
-                ++summary_.points_dropped;
-                continue;
-            }
-            grid_.insert(points[i]);
-        }
+        summary_.points_dropped += arena.execute([&] { return grid_.insert(points.subspan(begin, end - begin)); });
         const double used = static_cast<double>(grid_.memory_bytes());
         if (used > budget_bytes()) {
             // Extrapolate this call's growth to all of its points for the message.

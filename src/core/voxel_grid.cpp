@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
+
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
@@ -32,15 +34,14 @@ VoxelKey VoxelGrid::key_of_local(const Eigen::Vector3d& local) const {
     return key;
 }
 
-void VoxelGrid::insert(const Eigen::Vector3d& world) {
-    if (!world.allFinite()) throw InvalidInput("point coordinates must be finite");
-    if (!origin_set_) {
-        // Local origin: the lattice point nearest to the first point, so the world lattice is kept.
-        origin_ = (world / alpha_).array().round().matrix() * alpha_;
-        origin_set_ = true;
-    }
-    const Eigen::Vector3d local = world - origin_;
-    const VoxelKey key = key_of_local(local);
+void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
+    if (origin_set_) return;
+    // Local origin: the lattice point nearest to the first point, so the world lattice is kept.
+    origin_ = (world / alpha_).array().round().matrix() * alpha_;
+    origin_set_ = true;
+}
+
+std::int32_t VoxelGrid::voxel_index(const VoxelKey& key) {
     const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
     if (!last_block_ || block_key != last_block_key_) {
         const std::uint32_t b = index_.block_index(block_key);
@@ -57,8 +58,62 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
         stats_.emplace_back();
         keys_.push_back(key);
     }
-    stats_[static_cast<std::size_t>(slot)].add(local);
+    return slot;
+}
+
+void VoxelGrid::insert(const Eigen::Vector3d& world) {
+    if (!world.allFinite()) throw InvalidInput("point coordinates must be finite");
+    set_origin_from(world);
+    const Eigen::Vector3d local = world - origin_;
+    stats_[static_cast<std::size_t>(voxel_index(key_of_local(local)))].add(local);
     ++points_;
+}
+
+std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points) {
+    const std::size_t n = points.size();
+    std::size_t first = 0;
+    while (first < n && !points[first].allFinite()) ++first;
+    if (first == n) return n;
+    set_origin_from(points[first]);
+    // 1. The voxel key of every point, in parallel; a point out of range throws before any change.
+    constexpr std::uint32_t kSkip = 0xffffffffu;
+    std::vector<VoxelKey> keys(n);
+    std::vector<std::uint8_t> finite(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            finite[i] = points[i].allFinite();
+            if (finite[i]) keys[i] = key_of_local(points[i] - origin_);
+        }
+    });
+    // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
+    //    insertion numbers them (this is the only serial pass: one block lookup per block change).
+    std::vector<std::uint32_t> voxel(n, kSkip);
+    std::size_t dropped = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (finite[i])
+            voxel[i] = static_cast<std::uint32_t>(voxel_index(keys[i]));
+        else
+            ++dropped;
+    }
+    // 3. The points of each voxel, in point order (counting sort), then Welford's update per voxel
+    //    in parallel: each voxel sees its points in the order one-by-one insertion gives it, so the
+    //    statistics are identical to the last bit.
+    std::vector<std::uint32_t> start(stats_.size() + 1, 0);
+    for (std::uint32_t v : voxel)
+        if (v != kSkip) ++start[v + 1];
+    for (std::size_t v = 0; v < stats_.size(); ++v) start[v + 1] += start[v];
+    std::vector<std::uint32_t> order(n - dropped);
+    {
+        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+        for (std::size_t i = 0; i < n; ++i)
+            if (voxel[i] != kSkip) order[cursor[voxel[i]]++] = static_cast<std::uint32_t>(i);
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, stats_.size(), 512), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v)
+            for (std::uint32_t j = start[v]; j < start[v + 1]; ++j) stats_[v].add(points[order[j]] - origin_);
+    });
+    points_ += n - dropped;
+    return dropped;
 }
 
 std::size_t VoxelGrid::memory_bytes() const {

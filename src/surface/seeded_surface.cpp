@@ -98,17 +98,31 @@ public:
                     for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
     }
     /// Runs the waves from wave(); `prepare(cubes)` is called before a wave of cubes is examined,
-    /// so that a lazy implementation can evaluate their corners first. Returns the active cubes.
-    template <typename Lookup, typename Prepare>
-    std::vector<VoxelKey> run(bool seeding, Lookup&& lookup, Prepare&& prepare) {
+    /// so that a lazy implementation can evaluate their corners first. `make_lookup()` gives a
+    /// lookup for one thread: a large wave is examined in parallel chunks, and the cubes they lead
+    /// to are visited in chunk order (the serial order). Returns the active cubes.
+    template <typename MakeLookup, typename Prepare>
+    std::vector<VoxelKey> run(bool seeding, MakeLookup&& make_lookup, Prepare&& prepare) {
+        constexpr std::size_t kChunk = 1024;
         std::vector<VoxelKey> next;
+        std::vector<std::vector<VoxelKey>> actives, nexts;
         while (!wave_.empty()) {
             prepare(wave_);
+            const std::size_t chunks = (wave_.size() + kChunk - 1) / kChunk;
+            actives.assign(chunks, {});
+            nexts.assign(chunks, {});
+            tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+                auto lookup = make_lookup();
+                for (std::size_t i = c * kChunk; i < std::min(wave_.size(), (c + 1) * kChunk); ++i)
+                    classify_cube(
+                        wave_[i], seeding, eps_, lookup, [&](const VoxelKey& a) { actives[c].push_back(a); },
+                        [&](const VoxelKey& n) { nexts[c].push_back(n); });
+            });
             next.clear();
-            for (const VoxelKey& cube : wave_)
-                classify_cube(
-                    cube, seeding, eps_, lookup, [&](const VoxelKey& c) { active_.push_back(c); },
-                    [&](const VoxelKey& c) { visit(c, next); });
+            for (std::size_t c = 0; c < chunks; ++c) {
+                active_.insert(active_.end(), actives[c].begin(), actives[c].end());
+                for (const VoxelKey& n : nexts[c]) visit(n, next);
+            }
             std::swap(wave_, next);
             seeding = false;
         }
@@ -128,10 +142,10 @@ private:
 }  // namespace
 
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation) {
-    TsdfField::Accessor values(field);
     CubeSearch search(grid);
     search.seed(grid, dilation);
-    return search.run(true, [&](const VoxelKey& v) { return values.find(v); }, [](const std::vector<VoxelKey>&) {});
+    auto make_lookup = [&] { return [values = TsdfField::Accessor(field)](const VoxelKey& v) mutable { return values.find(v); }; };
+    return search.run(true, make_lookup, [](const std::vector<VoxelKey>&) {});
 }
 
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
@@ -263,9 +277,9 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             }
         evaluate_pending();
     };
-    Slots::Accessor values(slots);
+    auto make_lookup = [&] { return [&, values = Slots::Accessor(slots)](const VoxelKey& v) mutable { return lookup_in(values, v); }; };
     SeededTsdf out;
-    out.cubes = search.run(false, [&](const VoxelKey& v) { return lookup_in(values, v); }, prepare);
+    out.cubes = search.run(false, make_lookup, prepare);
     out.evaluated = samples.size();
 
     // The field: the defined evaluated vertices, in evaluation order (deterministic: the waves

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,6 +35,11 @@ public:
     /// Inserts one world point. Throws InvalidInput if it is not finite or falls outside the
     /// grid's index range (+-2^20 voxels around the first point).
     void insert(const Eigen::Vector3d& world_point);
+    /// Inserts the finite points of `points`, in order, skipping (and counting) the others: the
+    /// same grid, to the last bit, as inserting them one by one, built in parallel (keys, then the
+    /// points of each voxel). Throws InvalidInput before changing the grid if a point falls
+    /// outside the index range. Returns the number of non-finite points skipped.
+    std::size_t insert(std::span<const Eigen::Vector3d> points);
 
     /// Index of the voxel containing a local-frame point.
     VoxelKey key_of_local(const Eigen::Vector3d& local_point) const;
@@ -70,6 +76,10 @@ public:
     const Occupancy& occupancy(std::size_t block) const { return occupancy_[block]; }
 
 private:
+    void set_origin_from(const Eigen::Vector3d& world);
+    /// Index into stats_ of the voxel `key`, created (empty) if absent.
+    std::int32_t voxel_index(const VoxelKey& key);
+
     double alpha_;
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
     bool origin_set_ = false;
