@@ -166,7 +166,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     std::vector<std::vector<std::uint16_t>> pending;
     std::vector<std::uint32_t> pending_blocks;
     std::vector<std::size_t> pending_base;
-    // Evaluates the pending vertices, in parallel per vertex block.
+    std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (pending block, first vertex)
+    // Evaluates the pending vertices, in parallel (tasks of a few dozen vertices of one block).
     auto evaluate_pending = [&] {
         pending_base.resize(pending_blocks.size());
         std::size_t total = samples.size();
@@ -176,25 +177,34 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         }
         keys.resize(total);
         samples.resize(total);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pending_blocks.size(), 1), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        // Tasks of at most kTask vertices of one block, so that a wave of a few blocks (the long
+        // tail of the search) still keeps every thread busy.
+        constexpr std::size_t kTask = 48;
+        tasks.clear();
+        for (std::size_t i = 0; i < pending_blocks.size(); ++i)
+            for (std::size_t b = 0; b < pending[pending_blocks[i]].size(); b += kTask) tasks.push_back({i, b});
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& r) {
+            for (std::size_t t = r.begin(); t != r.end(); ++t) {
+                const auto [i, first] = tasks[t];
                 const std::uint32_t bi = pending_blocks[i];
                 const VoxelKey block_key = slots.block_keys()[bi];
                 const NeighbourhoodWindow window(grid, block_key, config.max_level());
                 Slots::Block& block = slots.block_at(bi);
-                std::size_t at = pending_base[i];
-                for (std::uint16_t offset : pending[bi]) {
+                const std::vector<std::uint16_t>& offsets = pending[bi];
+                const std::size_t last = std::min(offsets.size(), first + kTask);
+                for (std::size_t j = first; j < last; ++j) {
+                    const std::uint16_t offset = offsets[j];
+                    const std::size_t at = pending_base[i] + j;
                     const VoxelKey v = Slots::key_at(block_key, offset);
                     VertexSample s = evaluate_vertex(window, v, config, sensor_local, solver);
                     if (s.defined && !(std::fabs(s.tsdf) <= truncation)) s.defined = false;  // as assemble_field
                     keys[at] = v;
                     samples[at] = s;
                     block[offset] = s.defined ? static_cast<std::int32_t>(at) : kUndefined;
-                    ++at;
                 }
-                pending[bi].clear();
             }
         });
+        for (std::uint32_t bi : pending_blocks) pending[bi].clear();
         pending_blocks.clear();
     };
     auto lookup_in = [&](Slots::Accessor& values, const VoxelKey& v) -> const VertexSample* {

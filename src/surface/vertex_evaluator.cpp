@@ -1,5 +1,7 @@
 #include "lidarsurf/surface/vertex_evaluator.hpp"
 
+#include <cmath>
+
 #include "lidarsurf/surface/gaussian_confidence.hpp"
 #include "lidarsurf/surface/local_plane.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
@@ -19,6 +21,28 @@ VertexSample make_sample(const LocalPlane& plane, const Eigen::Vector3d& v, int 
     s.normal = plane.normal.cast<float>();
     return s;
 }
+
+}  // namespace
+
+bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config) {
+    const Eigen::Matrix3d c = stats.covariance();
+    if (config.min_planarity > 0) {
+        const double t = c.trace();
+        const double m = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1) + c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2) +
+                         c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2);
+        if (9.0 * m < (1.0 - 1e-6) * config.min_planarity * t * t) return true;
+    }
+    if (config.max_thickness > 0) {
+        const double s = (1.0 + 1e-6) * std::pow(config.max_thickness * config.voxel_size, 2);
+        const Eigen::Matrix3d a = c - s * Eigen::Matrix3d::Identity();
+        const double det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(1, 2)) - a(0, 1) * (a(0, 1) * a(2, 2) - a(1, 2) * a(0, 2)) +
+                           a(0, 2) * (a(0, 1) * a(1, 2) - a(1, 1) * a(0, 2));
+        if (a(0, 0) > 0 && a(0, 0) * a(1, 1) - a(0, 1) * a(0, 1) > 0 && det > 0) return true;
+    }
+    return false;
+}
+
+namespace {
 
 // The level loop of the modes (Sec. III-C1, Sec. IV-B). `stats_of(level)` gives the merged
 // statistics of H^level(v); the adaptive modes call it with level = 1, 2, ... in order, so it may
@@ -41,6 +65,8 @@ VertexSample choose_level(StatsOf&& stats_of, const Eigen::Vector3d& position, c
 VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vector3d& position,
                             const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
                             EigenSolver solver) {
+    if (stats.count < static_cast<std::uint64_t>(config.n_min)) return {};  // Eq. (1)
+    if (solver == EigenSolver::ClosedForm && rejected_by_invariants(stats, config)) return {};
     const auto plane = fit_plane(stats, config.n_min, sensor_local, min_lambda2, config.min_planarity, solver);  // Eq. (1), (2)
     if (!plane) return {};
     const double thickness = config.max_thickness * config.voxel_size;
@@ -73,6 +99,11 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
             window.grow(v, level, acc);
         else
             acc = window.box(v, level);
+        if (acc.n < config.n_min) {  // Eq. (1) fails: only the count is read
+            VoxelStats few;
+            few.count = static_cast<std::uint64_t>(acc.n);
+            return few;
+        }
         return acc.to_stats(position);
     };
     return choose_level(stats_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver);

@@ -8,6 +8,8 @@
 #include <random>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <cmath>
 
 using namespace lidarsurf;
 
@@ -175,3 +177,43 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
 }
 
 }  // namespace
+
+// The fast path's invariant pre-check against the eigenvalues (the oracle): on random
+// covariances from lines to blobs, whatever it rejects the eigenvalue tests reject too, and it
+// does reject most clear lines and clearly thick blobs (so it is not a no-op).
+TEST(VertexEvaluator, InvariantPreCheckOnlyRejectsWhatTheEigenvaluesReject) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> angle(0.0, 6.283185307179586), unit(0.0, 1.0);
+    ReconstructionConfig c;  // default guards: planarity 0.05, thickness 0.6 voxels
+    const double t2 = std::pow(c.max_thickness * c.voxel_size, 2);
+    int rejected = 0, lines = 0, lines_rejected = 0;
+    for (int i = 0; i < 20000; ++i) {
+        // Random orientation, eigenvalues spanning 1e-6 .. 1 m^2 with every ratio.
+        const Eigen::Matrix3d q = (Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()) *
+                                   Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()) *
+                                   Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitX())).toRotationMatrix();
+        const double l1 = std::pow(10.0, -3.0 * unit(rng)), l2 = l1 * std::pow(10.0, -4.0 * unit(rng)), l3 = l2 * std::pow(10.0, -4.0 * unit(rng));
+        VoxelStats s;
+        s.count = 50;
+        s.scatter = 50.0 * q * Eigen::Vector3d(l1, l2, l3).asDiagonal() * q.transpose();
+        const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(s.covariance()).eigenvalues();
+        const bool exact = ev[1] < c.min_planarity * ev[2] || ev[0] > t2;
+        const bool pre = rejected_by_invariants(s, c);
+        if (pre) {
+            ++rejected;
+            ASSERT_TRUE(exact) << "l = " << l1 << " " << l2 << " " << l3;
+        }
+        if (l2 < 0.002 * l1) {
+            ++lines;
+            lines_rejected += pre;
+        }
+    }
+    EXPECT_GT(rejected, 1000);
+    EXPECT_GT(lines_rejected, lines * 9 / 10);
+    // Guards off (the paper's modes): never rejects.
+    VoxelStats blob;
+    blob.count = 50;
+    blob.scatter = 50.0 * Eigen::Vector3d(1.0, 1e-9, 1e-9).asDiagonal();
+    EXPECT_TRUE(rejected_by_invariants(blob, c));
+    EXPECT_FALSE(rejected_by_invariants(blob, ReconstructionConfig::paper(Mode::AdaptiveGaussian)));
+}

@@ -38,6 +38,14 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
                             const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
                             EigenSolver solver);
 
+/// Whether the invariants of the covariance alone prove that evaluate_level rejects a level, so
+/// that the fast path can skip the eigen solve (about 28 % of the solves on a lidar frame):
+///  - planarity: with T = tr C = l1 + l2 + l3 and M = l1 l2 + l1 l3 + l2 l3 (the sum of C's
+///    principal 2x2 minors), M >= l1 l2 and l1 >= T / 3, so l2 / l1 <= 9 M / T^2;
+///  - thickness: l3 > t^2 iff C - t^2 I is positive definite (Sylvester: leading minors > 0).
+/// Both keep a relative margin of 1e-6, so rounding cannot reject a level the eigenvalues keep.
+bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config);
+
 /// Covariances with lambda2 below this (relative to alpha^2) are treated as degenerate.
 double degenerate_lambda2(double voxel_size);
 
