@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/mesh/mesh_filter.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
@@ -132,7 +133,10 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
             for (const std::uint64_t w : grid.occupancy(b)) n += std::popcount(w);
             surface_blocks += n >= 3;
         }
-        return blocks * 5 * 1024 + surface_blocks * 12 * 1024;
+        // Plus the packed snapshot of the statistics (PackedVoxels): one record per voxel and a
+        // header per block.
+        return blocks * 5 * 1024 + surface_blocks * 12 * 1024 + grid.size() * sizeof(PackedVoxels::Voxel) +
+               blocks * sizeof(PackedVoxels::Block);
     }
     // Every vertex within the largest level L of a voxel is a candidate, each costing its key, its
     // sample and its share of the field (measured ~43 B; 48 B here). Candidates are bounded by the

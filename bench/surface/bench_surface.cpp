@@ -40,9 +40,10 @@ BENCHMARK(BM_NeighbourhoodReference)->Unit(benchmark::kMillisecond);
 
 // ... and raw moments over the occupancy bits of a NeighbourhoodWindow (fast path).
 void BM_NeighbourhoodWindow(benchmark::State& state) {
+    const PackedVoxels packed(grid());
     for (auto _ : state)
         for (const VoxelKey& v : vertices()) {
-            const NeighbourhoodWindow w(grid(), BlockMap<std::int32_t>::block_of(v), 5);
+            const NeighbourhoodWindow w(packed, BlockMap<std::int32_t>::block_of(v), 5);
             Moments acc;
             for (int k = 1; k <= 5; ++k) w.grow(v, k, acc);
             benchmark::DoNotOptimize(acc.n);

@@ -17,8 +17,8 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
     return s;
 }
 
-NeighbourhoodWindow::NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& vertex_block, int max_level)
-    : stats_(grid.stats().data()), alpha_(grid.voxel_size()) {
+NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level)
+    : alpha_(voxels.grid().voxel_size()) {
     using Map = BlockMap<std::int32_t>;
     // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
     // radius ceil(k/8) blocks of b.
@@ -29,12 +29,7 @@ NeighbourhoodWindow::NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& 
     std::size_t i = 0;
     for (int z = -radius_; z <= radius_; ++z)
         for (int y = -radius_; y <= radius_; ++y)
-            for (int x = -radius_; x <= radius_; ++x, ++i) {
-                const std::int64_t b = grid.index().index_of(vertex_block + VoxelKey(x, y, z));
-                if (b >= 0)
-                    blocks_[i] = {grid.index().block_at(static_cast<std::size_t>(b)).data(),
-                                  grid.occupancy(static_cast<std::size_t>(b)).data()};
-            }
+            for (int x = -radius_; x <= radius_; ++x, ++i) blocks_[i] = voxels.find(vertex_block + VoxelKey(x, y, z));
 }
 
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
@@ -49,8 +44,8 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
     for (int bz = l.z() / B; bz <= h.z() / B; ++bz)
         for (int by = l.y() / B; by <= h.y() / B; ++by)
             for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
-                const WindowBlock& block = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
-                if (!block.index) continue;
+                const PackedVoxels::Block* block = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
+                if (!block) continue;
                 // The box within this block, in block coordinates, and its 8x8 layer masks.
                 const int x0 = std::max(l.x(), bx * B), x1 = std::min(h.x(), bx * B + m);
                 const int y0 = std::max(l.y(), by * B), y1 = std::min(h.y(), by * B + m);
@@ -62,19 +57,18 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
                 if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
                 for (int z = z0; z <= z1; ++z) {
                     const bool cap = inset == 0 || z == l.z() || z == h.z();
-                    std::uint64_t bits = block.occupancy[z & m] & (cap ? full : ring);
+                    std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(z & m)] & (cap ? full : ring);
                     while (bits) {
                         const int bit = std::countr_zero(bits);
                         bits &= bits - 1;
-                        const VoxelStats& s = stats_[block.index[bit | ((z & m) << 6)]];
-                        const double w = static_cast<double>(s.count);
-                        const double dx = s.mean.x() - px, dy = s.mean.y() - py, dz = s.mean.z() - pz;
+                        const PackedVoxels::Voxel& s = block->at(bit | ((z & m) << 6));
+                        const double w = s.count;
+                        const double dx = s.mx - px, dy = s.my - py, dz = s.mz - pz;
                         const double wx = w * dx, wy = w * dy, wz = w * dz;
                         n += w;
                         s1x += wx, s1y += wy, s1z += wz;
-                        const Eigen::Matrix3d& m2 = s.scatter;
-                        sxx += m2(0, 0) + wx * dx, sxy += m2(0, 1) + wx * dy, sxz += m2(0, 2) + wx * dz;
-                        syy += m2(1, 1) + wy * dy, syz += m2(1, 2) + wy * dz, szz += m2(2, 2) + wz * dz;
+                        sxx += s.xx + wx * dx, sxy += s.xy + wx * dy, sxz += s.xz + wx * dz;
+                        syy += s.yy + wy * dy, syz += s.yz + wy * dz, szz += s.zz + wz * dz;
                     }
                 }
             }

@@ -167,6 +167,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     std::vector<std::uint32_t> pending_blocks;
     std::vector<std::size_t> pending_base;
     std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (pending block, first vertex)
+    const PackedVoxels packed(grid);
     // Evaluates the pending vertices, in parallel (tasks of a few dozen vertices of one block).
     auto evaluate_pending = [&] {
         pending_base.resize(pending_blocks.size());
@@ -188,7 +189,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                 const auto [i, first] = tasks[t];
                 const std::uint32_t bi = pending_blocks[i];
                 const VoxelKey block_key = slots.block_keys()[bi];
-                const NeighbourhoodWindow window(grid, block_key, config.max_level());
+                const NeighbourhoodWindow window(packed, block_key, config.max_level());
                 Slots::Block& block = slots.block_at(bi);
                 const std::vector<std::uint16_t>& offsets = pending[bi];
                 const std::size_t last = std::min(offsets.size(), first + kTask);

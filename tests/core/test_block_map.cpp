@@ -1,12 +1,14 @@
 // BlockMap against std::map (the oracle) on random keys, negative ones included; the accessors;
-// the grid's occupancy bits against its index.
+// the grid's occupancy bits against its index; the packed snapshot against the grid.
 #include <gtest/gtest.h>
 
+#include <bitset>
 #include <map>
 #include <random>
 #include <tuple>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 
 using namespace lidarsurf;
@@ -84,4 +86,32 @@ TEST(VoxelGrid, OccupancyBitsMatchTheIndex) {
         }
     }
     EXPECT_EQ(occupied, grid.size());
+}
+
+// The packed snapshot against the grid (the oracle): every occupied voxel's record, found by its
+// rank in the occupancy bits, holds that voxel's statistics; absent blocks are nullptr.
+TEST(PackedVoxels, EveryVoxelIsFoundByRankWithItsStatistics) {
+    std::mt19937 rng(9);
+    std::normal_distribution<double> g(0.0, 1.5);
+    VoxelGrid grid(0.2);
+    for (int i = 0; i < 20000; ++i) grid.insert(Eigen::Vector3d(g(rng), g(rng), 0.5 * g(rng)));
+    const PackedVoxels packed(grid);
+    for (std::size_t v = 0; v < grid.size(); ++v) {
+        const VoxelKey key = grid.keys()[v];
+        const PackedVoxels::Block* block = packed.find(BlockMap<std::int32_t>::block_of(key));
+        ASSERT_NE(block, nullptr);
+        const PackedVoxels::Voxel& r = block->at(BlockMap<std::int32_t>::offset_of(key));
+        const VoxelStats& s = grid.stats()[v];
+        ASSERT_EQ(r.count, static_cast<double>(s.count));
+        ASSERT_EQ(Eigen::Vector3d(r.mx, r.my, r.mz), s.mean);
+        const Eigen::Matrix3d& m = s.scatter;
+        ASSERT_EQ(r.xx, m(0, 0));
+        ASSERT_EQ(r.xy, m(0, 1));
+        ASSERT_EQ(r.xz, m(0, 2));
+        ASSERT_EQ(r.yy, m(1, 1));
+        ASSERT_EQ(r.yz, m(1, 2));
+        ASSERT_EQ(r.zz, m(2, 2));
+    }
+    EXPECT_EQ(packed.find(VoxelKey(1000, 1000, 1000)), nullptr);
+    for (int i = 0; i < 256; ++i) EXPECT_EQ(PackedVoxels::kBitCount[static_cast<std::size_t>(i)], std::bitset<8>(static_cast<unsigned>(i)).count());
 }

@@ -42,12 +42,13 @@ void expect_same_stats(const VoxelStats& a, const VoxelStats& b, double alpha, c
 TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
     const double alpha = 0.2;
     const VoxelGrid grid = wavy_grid(alpha);
+    const PackedVoxels packed(grid);
     std::mt19937 rng(5);
     std::uniform_int_distribution<int> c(-16, 16), cz(-4, 4);
     for (int max_level : {5, 12}) {  // 12 > 8: a window of 5x5x5 blocks
         for (int trial = 0; trial < 200; ++trial) {
             const VoxelKey v(c(rng), c(rng), cz(rng));
-            const NeighbourhoodWindow window(grid, vertex_block(v), max_level);
+            const NeighbourhoodWindow window(packed, vertex_block(v), max_level);
             Moments grown;
             const Eigen::Vector3d p = v.cast<double>() * alpha;
             for (int k = 1; k <= max_level; ++k) {
@@ -65,6 +66,7 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
 TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
     const double alpha = 0.2;
     const VoxelGrid grid = wavy_grid(alpha);
+    const PackedVoxels packed(grid);
     const Eigen::Vector3d sensor = grid.to_local(grid.origin() + Eigen::Vector3d(0.5, -0.3, 2.0));
     std::size_t defined = 0, compared = 0;
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
@@ -76,7 +78,7 @@ TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
                 for (int y = -14; y <= 14; y += 2)
                     for (int x = -14; x <= 14; ++x) {
                         const VoxelKey v(x, y, z);
-                        const NeighbourhoodWindow window(grid, vertex_block(v), config.max_level());
+                        const NeighbourhoodWindow window(packed, vertex_block(v), config.max_level());
                         const VertexSample fast = evaluate_vertex(window, v, config, sensor, solver);
                         const VertexSample ref = evaluate_vertex(grid, v, config, sensor);
                         ++compared;

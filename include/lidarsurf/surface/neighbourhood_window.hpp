@@ -1,8 +1,9 @@
 #pragma once
-// Fast neighbourhood statistics for the vertices of one 8^3 vertex block (issue 5). The voxel
-// index blocks that any H^k(v), k <= max_level, of those vertices can reach are looked up once
-// (3x3x3 blocks for k_max <= 8), so summing a box needs no hashing and skips empty space 64
-// voxels at a time (VoxelGrid::occupancy); and each occupied voxel is added as
+// Fast neighbourhood statistics for the vertices of one 8^3 vertex block (issue 5). The packed
+// voxel blocks (PackedVoxels) that any H^k(v), k <= max_level, of those vertices can reach are
+// looked up once (3x3x3 blocks for k_max <= 8), so summing a box needs no hashing, skips empty
+// space 64 voxels at a time (VoxelGrid::occupancy) and reads compact records stored in block
+// order; and each occupied voxel is added as
 // raw moments in the frame of the vertex,
 //   n += |V|,  s1 += |V| d,  s2 += V_M2 + |V| d d^T   with d = V_mu - v,
 // which is Chan's merge (voxel_stats.cpp) expanded: no division per voxel, and small coordinates
@@ -12,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 
 namespace lidarsurf {
@@ -30,7 +32,7 @@ class NeighbourhoodWindow {
 public:
     /// Window for the vertices of vertex block `vertex_block` (vertices 8 b .. 8 b + 7 per axis)
     /// and levels up to `max_level`.
-    NeighbourhoodWindow(const VoxelGrid& grid, const VoxelKey& vertex_block, int max_level);
+    NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level);
 
     /// Adds the voxels of H^k(v) \ H^{k-1}(v) (all of H^1 for k = 1) to `acc`, whose reference
     /// point is v's position. v must be in the window's vertex block and k <= max_level.
@@ -46,16 +48,11 @@ private:
     // 64-bit mask per 8x8 layer.
     void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc) const;
 
-    const VoxelStats* stats_;
     double alpha_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1
     VoxelKey first_voxel_;  // smallest voxel key covered by the window
-    struct WindowBlock {
-        const std::int32_t* index = nullptr;       // nullptr: no voxel in this block
-        const std::uint64_t* occupancy = nullptr;  // VoxelGrid::occupancy
-    };
-    std::vector<WindowBlock> blocks_;  // side^3 blocks, x fastest
+    std::vector<const PackedVoxels::Block*> blocks_;  // side^3 blocks, x fastest (nullptr: no voxel)
 };
 
 }  // namespace lidarsurf
