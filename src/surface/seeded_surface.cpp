@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/block_mask.hpp"
@@ -128,7 +129,7 @@ public:
         }
         // Which cubes are reached does not depend on the order of the waves; the sort makes the
         // output (and so the mesh's vertex and triangle order) deterministic.
-        std::sort(active_.begin(), active_.end(), zyx_less);
+        tbb::parallel_sort(active_.begin(), active_.end(), zyx_less);
         return std::move(active_);
     }
 
