@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <tbb/parallel_for.h>
+
 namespace lidarsurf {
 
 namespace {
@@ -57,6 +59,16 @@ std::vector<VoxelKey> blocks_near_occupancy(const VoxelGrid& grid, int lo, int h
                     if (seen.try_emplace(b, 0).second) out.push_back(b);
                 }
     return out;
+}
+
+std::vector<MaskedBlock> dilated_occupancy(const VoxelGrid& grid, int lo, int hi) {
+    const std::vector<VoxelKey> blocks = blocks_near_occupancy(grid, lo, hi);
+    std::vector<MaskedBlock> all(blocks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) all[i] = {blocks[i], dilated_occupancy(grid, blocks[i], lo, hi)};
+    });
+    std::erase_if(all, [](const MaskedBlock& b) { return popcount(b.mask) == 0; });
+    return all;
 }
 
 }  // namespace lidarsurf

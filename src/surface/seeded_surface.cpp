@@ -220,54 +220,39 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing).
     const int d = config.seed_dilation;
     {
-        const std::vector<VoxelKey> blocks = blocks_near_occupancy(grid, -d, d + 1);
-        std::vector<BlockMask> masks(blocks.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) masks[i] = dilated_occupancy(grid, blocks[i], -d, d + 1);
-        });
-        std::vector<std::size_t> nonempty;
-        for (std::size_t i = 0; i < blocks.size(); ++i)
-            if (popcount(masks[i]) > 0) {
-                nonempty.push_back(i);
-                pending_blocks.push_back(slots.block_index(blocks[i]));
-            }
+        const std::vector<MaskedBlock> corners = dilated_occupancy(grid, -d, d + 1);
+        for (const MaskedBlock& b : corners) pending_blocks.push_back(slots.block_index(b.block));
         pending.resize(slots.block_count());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nonempty.size(), 16), [&](const auto& r) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, corners.size(), 16), [&](const auto& r) {
             for (std::size_t j = r.begin(); j != r.end(); ++j) {
                 std::vector<std::uint16_t>& list = pending[pending_blocks[j]];
-                list.reserve(static_cast<std::size_t>(popcount(masks[nonempty[j]])));
-                for_each_bit(masks[nonempty[j]], [&](int offset) { list.push_back(static_cast<std::uint16_t>(offset)); });
+                list.reserve(static_cast<std::size_t>(popcount(corners[j].mask)));
+                for_each_bit(corners[j].mask, [&](int offset) { list.push_back(static_cast<std::uint16_t>(offset)); });
             }
         });
         evaluate_pending();
     }
     {
-        const std::vector<VoxelKey> blocks = blocks_near_occupancy(grid, -d, d);
-        std::vector<BlockMask> masks(blocks.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) masks[i] = dilated_occupancy(grid, blocks[i], -d, d);
-        });
-        std::vector<std::uint32_t> visited_block(blocks.size());
-        for (std::size_t i = 0; i < blocks.size(); ++i)
-            if (popcount(masks[i]) > 0) visited_block[i] = search.visited().block_index(blocks[i]);
+        const std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);
+        std::vector<std::uint32_t> visited_block(seeds.size());
+        for (std::size_t i = 0; i < seeds.size(); ++i) visited_block[i] = search.visited().block_index(seeds[i].block);
         // Per seed block, in parallel: mark its seeds visited (its own visited block) and classify
         // them; the cubes they lead to are then visited serially, in block order.
-        std::vector<std::vector<VoxelKey>> active(blocks.size()), next(blocks.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 8), [&](const auto& r) {
+        std::vector<std::vector<VoxelKey>> active(seeds.size()), next(seeds.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 8), [&](const auto& r) {
             Slots::Accessor values(slots);
             auto lookup = [&](const VoxelKey& v) { return lookup_in(values, v); };
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                if (popcount(masks[i]) == 0) continue;
                 BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(visited_block[i]);
-                for_each_bit(masks[i], [&](int offset) {
+                for_each_bit(seeds[i].mask, [&](int offset) {
                     seen[static_cast<std::size_t>(offset)] = 1;
                     classify_cube(
-                        Slots::key_at(blocks[i], offset), true, search.eps(), lookup,
+                        Slots::key_at(seeds[i].block, offset), true, search.eps(), lookup,
                         [&](const VoxelKey& c) { active[i].push_back(c); }, [&](const VoxelKey& c) { next[i].push_back(c); });
                 });
             }
         });
-        for (std::size_t i = 0; i < blocks.size(); ++i) {
+        for (std::size_t i = 0; i < seeds.size(); ++i) {
             search.active().insert(search.active().end(), active[i].begin(), active[i].end());
             for (const VoxelKey& c : next[i]) search.visit(c, search.wave());
         }

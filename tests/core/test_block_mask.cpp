@@ -61,6 +61,15 @@ TEST(BlockMask, DilatedOccupancyMatchesBruteForce) {
                     }
                 }
         EXPECT_GE(marked, static_cast<int>(grid.size()) * (hi - lo + 1)) << "box " << lo << ".." << hi;
+        // The whole dilation: exactly the non-empty blocks, with the same masks.
+        const std::vector<MaskedBlock> all = dilated_occupancy(grid, lo, hi);
+        int points = 0;
+        for (const MaskedBlock& b : all) {
+            EXPECT_GT(popcount(b.mask), 0);
+            EXPECT_EQ(b.mask, dilated_occupancy(grid, b.block, lo, hi));
+            points += popcount(b.mask);
+        }
+        EXPECT_EQ(points, marked) << "box " << lo << ".." << hi;
     }
 }
 

@@ -44,4 +44,12 @@ BlockMask dilated_occupancy(const VoxelGrid& grid, const VoxelKey& block, int lo
 /// deterministic order (that of the grid's blocks).
 std::vector<VoxelKey> blocks_near_occupancy(const VoxelGrid& grid, int lo, int hi);
 
+struct MaskedBlock {
+    VoxelKey block;
+    BlockMask mask;
+};
+/// The whole dilated occupancy: every non-empty dilated_occupancy mask, in the order of
+/// blocks_near_occupancy, computed in parallel.
+std::vector<MaskedBlock> dilated_occupancy(const VoxelGrid& grid, int lo, int hi);
+
 }  // namespace lidarsurf
