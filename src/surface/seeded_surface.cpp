@@ -217,20 +217,46 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
 
     // Wave 0, the seeds, in parallel per block (three quarters of the vertices on a lidar frame):
     // the seed cubes are the occupied voxels dilated by [-d, d], so their corners are the occupied
-    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing).
+    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing). A seed cube with an
+    // undefined corner cannot be active, so the corners are evaluated in two passes: first each
+    // cube's all-even corner (one per cube), then the other corners of the cubes whose all-even
+    // corner is defined. A corner skipped this way is evaluated later if a wave needs it. On a
+    // lidar frame this skips a fifth of the seed corners, nine in ten of them undefined (the
+    // dearest vertices: every level fails up to k_max).
     const int d = config.seed_dilation;
     {
         const std::vector<MaskedBlock> corners = dilated_occupancy(grid, -d, d + 1);
-        for (const MaskedBlock& b : corners) pending_blocks.push_back(slots.block_index(b.block));
+        std::vector<std::uint32_t> block_of_corners(corners.size());
+        for (std::size_t j = 0; j < corners.size(); ++j) block_of_corners[j] = slots.block_index(corners[j].block);
         pending.resize(slots.block_count());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, corners.size(), 16), [&](const auto& r) {
-            for (std::size_t j = r.begin(); j != r.end(); ++j) {
-                std::vector<std::uint16_t>& list = pending[pending_blocks[j]];
-                list.reserve(static_cast<std::size_t>(popcount(corners[j].mask)));
-                for_each_bit(corners[j].mask, [&](int offset) { list.push_back(static_cast<std::uint16_t>(offset)); });
+        // Bits x + 8 y with x and y even, on the even z layers (block origins are multiples of 8).
+        constexpr std::uint64_t kEvenLayer = 0x0055005500550055ull;
+        auto queue = [&](auto&& wanted) {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, corners.size(), 16), [&](const auto& r) {
+                Slots::Accessor values(slots);
+                for (std::size_t j = r.begin(); j != r.end(); ++j) {
+                    std::vector<std::uint16_t>& list = pending[block_of_corners[j]];
+                    for_each_bit(corners[j].mask, [&](int offset) {
+                        if (wanted(values, Slots::key_at(corners[j].block, offset), offset)) list.push_back(static_cast<std::uint16_t>(offset));
+                    });
+                }
+            });
+            for (std::uint32_t bi : block_of_corners)
+                if (!pending[bi].empty()) pending_blocks.push_back(bi);
+            evaluate_pending();
+        };
+        auto all_even = [&](int offset) { return (offset >> 6) % 2 == 0 && ((kEvenLayer >> (offset & 63)) & 1u); };
+        queue([&](Slots::Accessor&, const VoxelKey&, int offset) { return all_even(offset); });
+        // The other corners of each cube c around v (c = v - n, n in {0,1}^3) whose all-even corner
+        // (c rounded up to even per axis) is defined.
+        queue([&](Slots::Accessor& values, const VoxelKey& v, int offset) {
+            if (all_even(offset)) return false;
+            for (int n = 0; n < 8; ++n) {
+                const VoxelKey c = v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1);
+                if (lookup_in(values, VoxelKey(c.x() + (c.x() & 1), c.y() + (c.y() & 1), c.z() + (c.z() & 1)))) return true;
             }
+            return false;
         });
-        evaluate_pending();
     }
     {
         const std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);

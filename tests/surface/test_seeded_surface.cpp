@@ -158,3 +158,19 @@ TEST(SeededSurface, DataOnALatticePlaneIsStillMeshed) {
     expect_same_mesh(a, b, "lattice plane");
     for (const auto& v : a.vertices) EXPECT_NEAR(v.z(), -1.0, 1e-6);
 }
+
+// The seed wave evaluates each seed cube's all-even corner first and the other corners only for
+// the cubes where it is defined. One isolated voxel with fewer than N_min points: every corner is
+// undefined (Eq. 1 fails at every level), so exactly one vertex (its all-even corner) is evaluated
+// instead of its 8 corners, and nothing is meshed.
+TEST(SeededSurface, ASeedCubeWithAnUndefinedCornerCostsOneVertex) {
+    for (const Eigen::Vector3d& at : {Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(-0.31, 0.47, -1.13)}) {
+        VoxelGrid grid(0.2, Eigen::Vector3d::Zero());
+        for (int i = 0; i < 3; ++i) grid.insert(at + Eigen::Vector3d(0.01 * i, 0.02 * i, 0.0));
+        ASSERT_EQ(grid.size(), 1u);
+        const SeededTsdf seeded = compute_seeded_tsdf(grid, ReconstructionConfig{}, Eigen::Vector3d(0, 0, 2));
+        EXPECT_EQ(seeded.evaluated, 1u) << at.transpose();
+        EXPECT_TRUE(seeded.cubes.empty());
+        EXPECT_EQ(seeded.field.size(), 0u);
+    }
+}
