@@ -17,6 +17,8 @@ namespace lidarsurf {
 namespace {
 
 VoxelKey corner(const VoxelKey& base, int c) { return base + VoxelKey(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
+// The corner of a cube whose coordinates are all even: the base rounded up to even per axis.
+VoxelKey even_corner(const VoxelKey& base) { return {base.x() + (base.x() & 1), base.y() + (base.y() & 1), base.z() + (base.z() & 1)}; }
 
 // The 6 faces: corner indices and the direction to the neighbouring cube.
 struct Face {
@@ -253,7 +255,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             if (all_even(offset)) return false;
             for (int n = 0; n < 8; ++n) {
                 const VoxelKey c = v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1);
-                if (lookup_in(values, VoxelKey(c.x() + (c.x() & 1), c.y() + (c.y() & 1), c.z() + (c.z() & 1)))) return true;
+                if (lookup_in(values, even_corner(c))) return true;
             }
             return false;
         });
@@ -283,21 +285,27 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             for (const VoxelKey& c : next[i]) search.visit(c, search.wave());
         }
     }
-    // The later waves (a quarter of the vertices): queue each cube's unevaluated corners, then
-    // evaluate them in parallel per block.
+    // The later waves (a quarter of the vertices): queue the cubes' unevaluated corners, then
+    // evaluate them in parallel.
     Slots::WriteAccessor slot_of(slots);
+    auto queue_vertex = [&](const VoxelKey& v) {
+        std::int32_t& slot = slot_of[v];
+        if (slot != kUnevaluated) return;
+        slot = kQueued;
+        const std::uint32_t bi = slot_of.block_index();
+        if (bi >= pending.size()) pending.resize(slots.block_count());
+        if (pending[bi].empty()) pending_blocks.push_back(bi);
+        pending[bi].push_back(static_cast<std::uint16_t>(Slots::offset_of(v)));
+    };
+    // As in the seed wave: each cube's all-even corner first, the other corners only of the cubes
+    // where it is defined (the others cannot be active).
     auto prepare = [&](const std::vector<VoxelKey>& cubes) {
-        for (const VoxelKey& cube : cubes)
-            for (int c = 0; c < 8; ++c) {
-                const VoxelKey v = corner(cube, c);
-                std::int32_t& slot = slot_of[v];
-                if (slot != kUnevaluated) continue;
-                slot = kQueued;
-                const std::uint32_t bi = slot_of.block_index();
-                if (bi >= pending.size()) pending.resize(slots.block_count());
-                if (pending[bi].empty()) pending_blocks.push_back(bi);
-                pending[bi].push_back(static_cast<std::uint16_t>(Slots::offset_of(v)));
-            }
+        for (const VoxelKey& cube : cubes) queue_vertex(even_corner(cube));
+        evaluate_pending();
+        for (const VoxelKey& cube : cubes) {
+            if (slot_of[even_corner(cube)] < 0) continue;
+            for (int c = 0; c < 8; ++c) queue_vertex(corner(cube, c));
+        }
         evaluate_pending();
     };
     auto make_lookup = [&] { return [&, values = Slots::Accessor(slots)](const VoxelKey& v) mutable { return lookup_in(values, v); }; };
