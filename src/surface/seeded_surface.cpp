@@ -17,8 +17,10 @@ namespace lidarsurf {
 namespace {
 
 VoxelKey corner(const VoxelKey& base, int c) { return base + VoxelKey(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
-// The corner of a cube whose coordinates are all even: the base rounded up to even per axis.
+// The corners of a cube whose coordinates are all even / all odd: the base rounded up to even /
+// to odd per axis. Every cube has exactly one of each; they are the lazy evaluation's probes.
 VoxelKey even_corner(const VoxelKey& base) { return {base.x() + (base.x() & 1), base.y() + (base.y() & 1), base.z() + (base.z() & 1)}; }
+VoxelKey odd_corner(const VoxelKey& base) { return {base.x() + 1 - (base.x() & 1), base.y() + 1 - (base.y() & 1), base.z() + 1 - (base.z() & 1)}; }
 
 // The 6 faces: corner indices and the direction to the neighbouring cube.
 struct Face {
@@ -219,27 +221,25 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
 
     // Wave 0, the seeds, in parallel per block (three quarters of the vertices on a lidar frame):
     // the seed cubes are the occupied voxels dilated by [-d, d], so their corners are the occupied
-    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing). A seed cube with an
-    // undefined corner cannot be active, so the corners are evaluated in two passes: first each
-    // cube's all-even corner (one per cube), then the other corners of the cubes whose all-even
-    // corner is defined. A corner skipped this way is evaluated later if a wave needs it. On a
-    // lidar frame this skips a fifth of the seed corners, nine in ten of them undefined (the
-    // dearest vertices: every level fails up to k_max).
+    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing). A cube with an undefined
+    // corner cannot be active, so the corners are evaluated in three passes: each cube's all-even
+    // corner, then the all-odd corner of the cubes whose all-even one is defined, then the other
+    // six corners of the cubes whose two probes are defined. A corner skipped this way is
+    // evaluated later if a wave needs it. Skipped vertices are mostly undefined ones, the dearest
+    // (every level fails up to k_max).
     const int d = config.seed_dilation;
     {
         const std::vector<MaskedBlock> corners = dilated_occupancy(grid, -d, d + 1);
         std::vector<std::uint32_t> block_of_corners(corners.size());
         for (std::size_t j = 0; j < corners.size(); ++j) block_of_corners[j] = slots.block_index(corners[j].block);
         pending.resize(slots.block_count());
-        // Bits x + 8 y with x and y even, on the even z layers (block origins are multiples of 8).
-        constexpr std::uint64_t kEvenLayer = 0x0055005500550055ull;
         auto queue = [&](auto&& wanted) {
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, corners.size(), 16), [&](const auto& r) {
                 Slots::Accessor values(slots);
                 for (std::size_t j = r.begin(); j != r.end(); ++j) {
                     std::vector<std::uint16_t>& list = pending[block_of_corners[j]];
                     for_each_bit(corners[j].mask, [&](int offset) {
-                        if (wanted(values, Slots::key_at(corners[j].block, offset), offset)) list.push_back(static_cast<std::uint16_t>(offset));
+                        if (wanted(values, Slots::key_at(corners[j].block, offset))) list.push_back(static_cast<std::uint16_t>(offset));
                     });
                 }
             });
@@ -247,17 +247,21 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                 if (!pending[bi].empty()) pending_blocks.push_back(bi);
             evaluate_pending();
         };
-        auto all_even = [&](int offset) { return (offset >> 6) % 2 == 0 && ((kEvenLayer >> (offset & 63)) & 1u); };
-        queue([&](Slots::Accessor&, const VoxelKey&, int offset) { return all_even(offset); });
-        // The other corners of each cube c around v (c = v - n, n in {0,1}^3) whose all-even corner
-        // (c rounded up to even per axis) is defined.
-        queue([&](Slots::Accessor& values, const VoxelKey& v, int offset) {
-            if (all_even(offset)) return false;
+        // Parity class of a vertex: bit a set when coordinate a is odd (0: all even, 7: all odd).
+        auto parity = [](const VoxelKey& v) { return (v.x() & 1) | ((v.y() & 1) << 1) | ((v.z() & 1) << 2); };
+        // Whether some cube c around v (c = v - n, n in {0,1}^3) has its probes defined.
+        auto near_live_cube = [&](Slots::Accessor& values, const VoxelKey& v, bool both) {
             for (int n = 0; n < 8; ++n) {
                 const VoxelKey c = v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1);
-                if (lookup_in(values, even_corner(c))) return true;
+                if (lookup_in(values, even_corner(c)) && (!both || lookup_in(values, odd_corner(c)))) return true;
             }
             return false;
+        };
+        queue([&](Slots::Accessor&, const VoxelKey& v) { return parity(v) == 0; });
+        queue([&](Slots::Accessor& values, const VoxelKey& v) { return parity(v) == 7 && near_live_cube(values, v, false); });
+        queue([&](Slots::Accessor& values, const VoxelKey& v) {
+            const int p = parity(v);
+            return p != 0 && p != 7 && near_live_cube(values, v, true);
         });
     }
     {
@@ -297,13 +301,16 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         if (pending[bi].empty()) pending_blocks.push_back(bi);
         pending[bi].push_back(static_cast<std::uint16_t>(Slots::offset_of(v)));
     };
-    // As in the seed wave: each cube's all-even corner first, the other corners only of the cubes
-    // where it is defined (the others cannot be active).
+    // As in the seed wave: the all-even corners, the all-odd corners of the cubes whose all-even
+    // one is defined, then the other corners of the cubes whose two probes are defined.
     auto prepare = [&](const std::vector<VoxelKey>& cubes) {
         for (const VoxelKey& cube : cubes) queue_vertex(even_corner(cube));
         evaluate_pending();
+        for (const VoxelKey& cube : cubes)
+            if (slot_of[even_corner(cube)] >= 0) queue_vertex(odd_corner(cube));
+        evaluate_pending();
         for (const VoxelKey& cube : cubes) {
-            if (slot_of[even_corner(cube)] < 0) continue;
+            if (slot_of[even_corner(cube)] < 0 || slot_of[odd_corner(cube)] < 0) continue;
             for (int c = 0; c < 8; ++c) queue_vertex(corner(cube, c));
         }
         evaluate_pending();
