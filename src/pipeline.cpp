@@ -1,12 +1,12 @@
 #include "lidarsurf/pipeline.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cstdio>
 
 #include <tbb/task_arena.h>
 
+#include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
@@ -129,9 +129,7 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
         // the welding table, about 10 KiB more. Rounded up to 5 and 12 KiB.
         std::size_t surface_blocks = 0;
         for (std::size_t b = 0; b < blocks; ++b) {
-            int n = 0;
-            for (const std::uint64_t w : grid.occupancy(b)) n += std::popcount(w);
-            surface_blocks += n >= 3;
+            surface_blocks += popcount(grid.occupancy(b)) >= 3;
         }
         // Plus the packed snapshot of the statistics (PackedVoxels): one record per voxel and a
         // header per block.

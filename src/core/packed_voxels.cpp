@@ -4,6 +4,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include "lidarsurf/core/block_mask.hpp"
+
 namespace lidarsurf {
 
 PackedVoxels::PackedVoxels(const VoxelGrid& grid) : grid_(&grid) {
@@ -12,9 +14,7 @@ PackedVoxels::PackedVoxels(const VoxelGrid& grid) : grid_(&grid) {
     // Where each block's records start: a prefix sum of its occupied voxels.
     std::vector<std::size_t> start(blocks + 1, 0);
     for (std::size_t b = 0; b < blocks; ++b) {
-        int n = 0;
-        for (std::uint64_t w : grid.occupancy(b)) n += std::popcount(w);
-        start[b + 1] = start[b] + static_cast<std::size_t>(n);
+        start[b + 1] = start[b] + static_cast<std::size_t>(popcount(grid.occupancy(b)));
     }
     voxels_.resize(start[blocks]);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 64), [&](const auto& r) {

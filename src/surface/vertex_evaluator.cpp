@@ -25,7 +25,9 @@ VertexSample make_sample(const LocalPlane& plane, const Eigen::Vector3d& v, int 
 }  // namespace
 
 bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config) {
-    const Eigen::Matrix3d c = stats.covariance();
+    // On the scatter S = n C rather than C (no division; fit_plane forms C itself): the planarity
+    // bound is homogeneous of degree 2, and l3(C) > t^2 iff S - n t^2 I is positive definite.
+    const Eigen::Matrix3d& c = stats.scatter;
     if (config.min_planarity > 0) {
         const double t = c.trace();
         const double m = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1) + c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2) +
@@ -33,7 +35,7 @@ bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig&
         if (9.0 * m < (1.0 - 1e-6) * config.min_planarity * t * t) return true;
     }
     if (config.max_thickness > 0) {
-        const double s = (1.0 + 1e-6) * std::pow(config.max_thickness * config.voxel_size, 2);
+        const double s = (1.0 + 1e-6) * std::pow(config.max_thickness * config.voxel_size, 2) * static_cast<double>(stats.count);
         const Eigen::Matrix3d a = c - s * Eigen::Matrix3d::Identity();
         const double det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(1, 2)) - a(0, 1) * (a(0, 1) * a(2, 2) - a(1, 2) * a(0, 2)) +
                            a(0, 2) * (a(0, 1) * a(1, 2) - a(1, 1) * a(0, 2));
