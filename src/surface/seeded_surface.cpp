@@ -2,13 +2,17 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <optional>
+#include <thread>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/block_mask.hpp"
+#include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
 
@@ -153,208 +157,197 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
     return search.run(true, make_lookup, [](const std::vector<VoxelKey>&) {});
 }
 
+namespace {
+
+// Lazy, concurrent evaluation of vertices for the fast path (one object per task). A vertex's
+// slot in `slots` is kUnevaluated, kBusy (a thread is evaluating it), kUndefined, or the index
+// of its sample. The first thread to need a vertex claims and evaluates it; another one needing
+// it meanwhile waits for the value. Blocks of `slots` must exist before (their creation is not
+// concurrent), and keys / samples must have room for every vertex evaluated.
+class CornerEvaluator {
+public:
+    using Slots = BlockMap<std::int32_t>;
+    static constexpr std::int32_t kUnevaluated = -1, kUndefined = -3, kBusy = -4;
+
+    struct Shared {
+        Slots& slots;
+        const PackedVoxels& packed;
+        const ReconstructionConfig& config;
+        Eigen::Vector3d sensor_local;
+        EigenSolver solver;
+        double truncation;
+        std::vector<VoxelKey>& keys;
+        std::vector<VertexSample>& samples;
+        std::atomic<std::size_t>& next;  ///< next free index in keys / samples
+    };
+    explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots) {}
+
+    /// Whether vertex v is defined, evaluating it if nobody has.
+    bool defined(const VoxelKey& v) {
+        // The block exists and is not const: the accessor only caches it.
+        std::atomic_ref<std::int32_t> slot(*const_cast<std::int32_t*>(values_.find(v)));
+        std::int32_t state = slot.load(std::memory_order_acquire);
+        if (state == kUnevaluated && slot.compare_exchange_strong(state, kBusy, std::memory_order_acq_rel)) {
+            VertexSample sample = evaluate_vertex(window(Slots::block_of(v)), v, s_.config, s_.sensor_local, s_.solver);
+            if (sample.defined && !(std::fabs(sample.tsdf) <= s_.truncation)) sample.defined = false;  // as assemble_field
+            const std::size_t at = s_.next.fetch_add(1, std::memory_order_relaxed);
+            s_.keys[at] = v;
+            s_.samples[at] = sample;
+            state = sample.defined ? static_cast<std::int32_t>(at) : kUndefined;
+            slot.store(state, std::memory_order_release);
+        }
+        while (state == kBusy) {
+            std::this_thread::yield();
+            state = slot.load(std::memory_order_acquire);
+        }
+        return state >= 0;
+    }
+    /// Evaluates the corners of `cube`. A cube with an undefined corner cannot be active, so
+    /// lazily: its all-even corner, its all-odd corner if that one is defined, then the other
+    /// six if both are (every cube has exactly one corner of each parity). Returns whether the
+    /// two probes are defined.
+    bool evaluate_corners(const VoxelKey& cube) {
+        if (!defined(even_corner(cube)) || !defined(odd_corner(cube))) return false;
+        for (int c = 0; c < 8; ++c) defined(corner(cube, c));
+        return true;
+    }
+    /// The sample of an evaluated vertex, nullptr if undefined (or not evaluated).
+    const VertexSample* sample(const VoxelKey& v) {
+        const std::int32_t* slot = values_.find(v);
+        return slot && *slot >= 0 ? &s_.samples[static_cast<std::size_t>(*slot)] : nullptr;
+    }
+
+private:
+    // The window of a vertex block, from the last few built (a cube's corners are in 1 to 8).
+    const NeighbourhoodWindow& window(const VoxelKey& block) {
+        for (int w = 0; w < kWindows; ++w)
+            if (windows_[w] && window_block_[w] == block) return *windows_[w];
+        const int w = next_window_++ % kWindows;
+        windows_[w].emplace(s_.packed, block, s_.config.max_level());
+        window_block_[w] = block;
+        return *windows_[w];
+    }
+    static constexpr int kWindows = 4;
+    const Shared& s_;
+    Slots::Accessor values_;
+    std::array<std::optional<NeighbourhoodWindow>, kWindows> windows_;
+    std::array<VoxelKey, kWindows> window_block_;
+    int next_window_ = 0;
+};
+
+}  // namespace
+
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
                                EigenSolver solver) {
     config.validate();
-    const Eigen::Vector3d sensor_local = grid.to_local(sensor_world);
-    const double truncation = config.truncation_distance();
-    // Every vertex the search asks for, in evaluation order, and a block map from vertex to its
-    // position there (or one of the states below).
-    constexpr std::int32_t kUnevaluated = -1, kQueued = -2, kUndefined = -3;
-    using Slots = BlockMap<std::int32_t>;
-    Slots slots(kUnevaluated);
+    using Slots = CornerEvaluator::Slots;
+    Slots slots(CornerEvaluator::kUnevaluated);
     slots.reserve_blocks(grid.index().block_count() * 2);
-    std::vector<VoxelKey> keys;
+    std::vector<VoxelKey> keys;  // the vertices evaluated, in evaluation order (any), and their samples
     std::vector<VertexSample> samples;
-    // Vertices to evaluate in this wave, grouped by vertex block so that each group shares one
-    // NeighbourhoodWindow (no hashing in the neighbourhood sums).
-    std::vector<std::vector<std::uint16_t>> pending;
-    std::vector<std::uint32_t> pending_blocks;
-    std::vector<std::size_t> pending_base;
-    std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (pending block, first vertex)
+    std::atomic<std::size_t> next{0};
     const PackedVoxels packed(grid);
-    // About 3.5 evaluated vertices per voxel on lidar frames: reserving avoids regrowing (and
-    // copying) the arrays wave after wave.
-    keys.reserve(4 * grid.size());
-    samples.reserve(4 * grid.size());
-    // Evaluates the pending vertices, in parallel (tasks of a few dozen vertices of one block).
-    auto evaluate_pending = [&] {
-        pending_base.resize(pending_blocks.size());
-        std::size_t total = samples.size();
-        for (std::size_t i = 0; i < pending_blocks.size(); ++i) {
-            pending_base[i] = total;
-            total += pending[pending_blocks[i]].size();
-        }
-        keys.resize(total);
-        samples.resize(total);
-        // Tasks of at most kTask vertices of one block, so that a wave of a few blocks (the long
-        // tail of the search) still keeps every thread busy.
-        constexpr std::size_t kTask = 48;
-        tasks.clear();
-        for (std::size_t i = 0; i < pending_blocks.size(); ++i)
-            for (std::size_t b = 0; b < pending[pending_blocks[i]].size(); b += kTask) tasks.push_back({i, b});
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& r) {
-            for (std::size_t t = r.begin(); t != r.end(); ++t) {
-                const auto [i, first] = tasks[t];
-                const std::uint32_t bi = pending_blocks[i];
-                const VoxelKey block_key = slots.block_keys()[bi];
-                const NeighbourhoodWindow window(packed, block_key, config.max_level());
-                Slots::Block& block = slots.block_at(bi);
-                const std::vector<std::uint16_t>& offsets = pending[bi];
-                const std::size_t last = std::min(offsets.size(), first + kTask);
-                for (std::size_t j = first; j < last; ++j) {
-                    const std::uint16_t offset = offsets[j];
-                    const std::size_t at = pending_base[i] + j;
-                    const VoxelKey v = Slots::key_at(block_key, offset);
-                    VertexSample s = evaluate_vertex(window, v, config, sensor_local, solver);
-                    if (s.defined && !(std::fabs(s.tsdf) <= truncation)) s.defined = false;  // as assemble_field
-                    keys[at] = v;
-                    samples[at] = s;
-                    block[offset] = s.defined ? static_cast<std::int32_t>(at) : kUndefined;
-                }
-            }
-        });
-        for (std::uint32_t bi : pending_blocks) pending[bi].clear();
-        pending_blocks.clear();
+    const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
+                                         keys, samples, next};
+    // Room for `more` vertices; trimmed back after each parallel pass.
+    auto make_room = [&](std::size_t more) {
+        keys.resize(next.load() + more);
+        samples.resize(next.load() + more);
     };
-    auto lookup_in = [&](Slots::Accessor& values, const VoxelKey& v) -> const VertexSample* {
-        const std::int32_t* slot = values.find(v);
-        return slot && *slot >= 0 ? &samples[static_cast<std::size_t>(*slot)] : nullptr;
+    auto trim = [&] {
+        keys.resize(next.load());
+        samples.resize(next.load());
     };
     CubeSearch search(grid);
 
-    // Wave 0, the seeds, in parallel per block (three quarters of the vertices on a lidar frame):
-    // the seed cubes are the occupied voxels dilated by [-d, d], so their corners are the occupied
-    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing). A cube with an undefined
-    // corner cannot be active, so the corners are evaluated in three passes: each cube's all-even
-    // corner, then the all-odd corner of the cubes whose all-even one is defined, then the other
-    // six corners of the cubes whose two probes are defined. A corner skipped this way is
-    // evaluated later if a wave needs it. Skipped vertices are mostly undefined ones, the dearest
-    // (every level fails up to k_max).
+    // Wave 0, the seeds (three quarters of the vertices on a lidar frame), in parallel per block:
+    // the seed cubes are the occupied voxels dilated by [-d, d] and their corners the occupied
+    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing). Each seed cube's corners
+    // are evaluated lazily, then the cube is classified; the cubes it leads to are visited
+    // serially, in block order.
     const int d = config.seed_dilation;
     {
-        const std::vector<MaskedBlock> corners = dilated_occupancy(grid, -d, d + 1);
-        std::vector<std::uint32_t> block_of_corners(corners.size());
-        for (std::size_t j = 0; j < corners.size(); ++j) block_of_corners[j] = slots.block_index(corners[j].block);
-        pending.resize(slots.block_count());
-        auto queue = [&](auto&& wanted) {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, corners.size(), 16), [&](const auto& r) {
-                Slots::Accessor values(slots);
-                for (std::size_t j = r.begin(); j != r.end(); ++j) {
-                    std::vector<std::uint16_t>& list = pending[block_of_corners[j]];
-                    for_each_bit(corners[j].mask, [&](int offset) {
-                        if (wanted(values, Slots::key_at(corners[j].block, offset))) list.push_back(static_cast<std::uint16_t>(offset));
-                    });
-                }
-            });
-            for (std::uint32_t bi : block_of_corners)
-                if (!pending[bi].empty()) pending_blocks.push_back(bi);
-            evaluate_pending();
-        };
-        // Parity class of a vertex: bit a set when coordinate a is odd (0: all even, 7: all odd).
-        auto parity = [](const VoxelKey& v) { return (v.x() & 1) | ((v.y() & 1) << 1) | ((v.z() & 1) << 2); };
-        // Whether some cube c = v - n (n in {0,1}^3) around v has its all-even probe defined and,
-        // when `both`, its all-odd one too. On an axis where v is even, c's even corner has v's
-        // coordinate whatever n, and its odd corner v - 1 or v + 1 (n = 1 or 0); on an odd axis,
-        // the other way round. So the even corner depends only on n's bits on v's odd axes, the
-        // odd corner only on its bits on v's even axes, and the 8 cubes have a live one iff one
-        // of the 2^(odd axes) even corners is defined and one of the 2^(even axes) odd corners is:
-        // at most 6 distinct lookups instead of 16.
-        auto any_defined = [&](Slots::Accessor& values, const VoxelKey& v, int axes) {
-            // The vertices v + s, s_a in {-1, +1} on the axes in `axes`, 0 elsewhere.
-            for (int m = 0; m < 8; ++m) {
-                if (m & ~axes) continue;
-                VoxelKey w = v;
-                for (int a = 0; a < 3; ++a)
-                    if (axes >> a & 1) w[a] += (m >> a & 1) ? 1 : -1;
-                if (lookup_in(values, w)) return true;
-            }
-            return false;
-        };
-        auto near_live_cube = [&](Slots::Accessor& values, const VoxelKey& v, bool both) {
-            const int odd = parity(v);
-            return any_defined(values, v, odd) && (!both || any_defined(values, v, 7 & ~odd));
-        };
-        queue([&](Slots::Accessor&, const VoxelKey& v) { return parity(v) == 0; });
-        queue([&](Slots::Accessor& values, const VoxelKey& v) { return parity(v) == 7 && near_live_cube(values, v, false); });
-        queue([&](Slots::Accessor& values, const VoxelKey& v) {
-            const int p = parity(v);
-            return p != 0 && p != 7 && near_live_cube(values, v, true);
-        });
-    }
-    {
+        std::size_t corner_count = 0;
+        for (const MaskedBlock& m : dilated_occupancy(grid, -d, d + 1)) {
+            slots.block_index(m.block);
+            corner_count += static_cast<std::size_t>(popcount(m.mask));
+        }
+        make_room(corner_count);
         const std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);
         std::vector<std::uint32_t> visited_block(seeds.size());
         for (std::size_t i = 0; i < seeds.size(); ++i) visited_block[i] = search.visited().block_index(seeds[i].block);
-        // Per seed block, in parallel: mark its seeds visited (its own visited block) and classify
-        // them; the cubes they lead to are then visited serially, in block order.
-        std::vector<std::vector<VoxelKey>> active(seeds.size()), next(seeds.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 8), [&](const auto& r) {
-            Slots::Accessor values(slots);
-            auto lookup = [&](const VoxelKey& v) { return lookup_in(values, v); };
+        std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
+            CornerEvaluator corners(shared);
+            auto lookup = [&](const VoxelKey& v) { return corners.sample(v); };
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(visited_block[i]);
                 for_each_bit(seeds[i].mask, [&](int offset) {
                     seen[static_cast<std::size_t>(offset)] = 1;
+                    const VoxelKey cube = Slots::key_at(seeds[i].block, offset);
+                    if (!corners.evaluate_corners(cube)) return;  // not active, leads nowhere
                     classify_cube(
-                        Slots::key_at(seeds[i].block, offset), true, search.eps(), lookup,
-                        [&](const VoxelKey& c) { active[i].push_back(c); }, [&](const VoxelKey& c) { next[i].push_back(c); });
+                        cube, true, search.eps(), lookup, [&](const VoxelKey& c) { active[i].push_back(c); },
+                        [&](const VoxelKey& c) { next_cubes[i].push_back(c); });
                 });
             }
         });
+        trim();
         for (std::size_t i = 0; i < seeds.size(); ++i) {
             search.active().insert(search.active().end(), active[i].begin(), active[i].end());
-            for (const VoxelKey& c : next[i]) search.visit(c, search.wave());
+            for (const VoxelKey& c : next_cubes[i]) search.visit(c, search.wave());
         }
     }
-    // The later waves (a quarter of the vertices): queue the cubes' unevaluated corners, then
-    // evaluate them in parallel.
-    Slots::WriteAccessor slot_of(slots);
-    auto queue_vertex = [&](const VoxelKey& v) {
-        std::int32_t& slot = slot_of[v];
-        if (slot != kUnevaluated) return;
-        slot = kQueued;
-        const std::uint32_t bi = slot_of.block_index();
-        if (bi >= pending.size()) pending.resize(slots.block_count());
-        if (pending[bi].empty()) pending_blocks.push_back(bi);
-        pending[bi].push_back(static_cast<std::uint16_t>(Slots::offset_of(v)));
-    };
-    // As in the seed wave: the all-even corners, the all-odd corners of the cubes whose all-even
-    // one is defined, then the other corners of the cubes whose two probes are defined.
+    // The later waves (a quarter of the vertices, ~40 small waves): the corners' blocks are
+    // created serially, then each cube's corners are evaluated lazily in parallel; the search
+    // then classifies the wave.
     auto prepare = [&](const std::vector<VoxelKey>& cubes) {
-        for (const VoxelKey& cube : cubes) queue_vertex(even_corner(cube));
-        evaluate_pending();
-        for (const VoxelKey& cube : cubes)
-            if (slot_of[even_corner(cube)] >= 0) queue_vertex(odd_corner(cube));
-        evaluate_pending();
-        for (const VoxelKey& cube : cubes) {
-            if (slot_of[even_corner(cube)] < 0 || slot_of[odd_corner(cube)] < 0) continue;
-            for (int c = 0; c < 8; ++c) queue_vertex(corner(cube, c));
+        {
+            Slots::WriteAccessor slot_of(slots);
+            for (const VoxelKey& cube : cubes)
+                for (int c = 0; c < 8; ++c) slot_of[corner(cube, c)];
         }
-        evaluate_pending();
+        make_room(8 * cubes.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cubes.size(), 8), [&](const auto& r) {
+            CornerEvaluator corners(shared);
+            for (std::size_t i = r.begin(); i != r.end(); ++i) corners.evaluate_corners(cubes[i]);
+        });
+        trim();
     };
-    auto make_lookup = [&] { return [&, values = Slots::Accessor(slots)](const VoxelKey& v) mutable { return lookup_in(values, v); }; };
+    auto make_lookup = [&] {
+        return [values = Slots::Accessor(slots), &samples](const VoxelKey& v) mutable -> const VertexSample* {
+            const std::int32_t* slot = values.find(v);
+            return slot && *slot >= 0 ? &samples[static_cast<std::size_t>(*slot)] : nullptr;
+        };
+    };
     SeededTsdf out;
     out.cubes = search.run(false, make_lookup, prepare);
     out.evaluated = samples.size();
 
-    // The field: the defined evaluated vertices, in evaluation order (deterministic: the waves
-    // and the grouping by block do not depend on the thread count).
-    std::vector<std::int32_t> position(samples.size(), kUndefined);
-    std::size_t defined = 0;
-    for (std::size_t i = 0; i < samples.size(); ++i)
-        if (samples[i].defined) position[i] = static_cast<std::int32_t>(defined++);
+    // The field: the defined evaluated vertices, ordered by slot (block creation order, then
+    // offset), which does not depend on the thread count.
+    const std::size_t nblocks = slots.block_count();
+    std::vector<std::size_t> block_start(nblocks + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b != r.end(); ++b)
+            for (std::int32_t slot : slots.block_at(b)) block_start[b + 1] += slot >= 0;
+    });
+    for (std::size_t b = 0; b < nblocks; ++b) block_start[b + 1] += block_start[b];
+    const std::size_t defined = block_start[nblocks];
     std::vector<VoxelKey> field_keys(defined);
     std::vector<VertexSample> field_samples(defined);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.block_count(), 16), [&](const auto& r) {
-        for (std::size_t b = r.begin(); b != r.end(); ++b)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            std::size_t at = block_start[b];
             for (std::int32_t& slot : slots.block_at(b))
                 if (slot >= 0) {
                     const auto i = static_cast<std::size_t>(slot);
-                    slot = position[i];
-                    field_keys[static_cast<std::size_t>(slot)] = keys[i];
-                    field_samples[static_cast<std::size_t>(slot)] = samples[i];
+                    slot = static_cast<std::int32_t>(at);
+                    field_keys[at] = keys[i];
+                    field_samples[at] = samples[i];
+                    ++at;
                 }
+        }
     });
     out.field = TsdfField(std::move(slots), std::move(field_keys), std::move(field_samples), grid.voxel_size(), grid.origin());
     return out;

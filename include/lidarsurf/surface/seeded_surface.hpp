@@ -32,8 +32,10 @@ struct SeededTsdf {
 };
 
 /// The fast path: the same cubes and the same values at their corners (up to rounding) as
-/// compute_tsdf followed by seeded_cubes, evaluating only the vertices the search touches, in
-/// parallel per search wave and per 8^3 vertex block through a NeighbourhoodWindow.
+/// compute_tsdf followed by seeded_cubes, evaluating only the vertices the search touches (each
+/// visited cube's corners lazily: its two probes, then the rest), in parallel per search wave,
+/// through NeighbourhoodWindows. `field` is ordered by vertex block, then offset: the result does
+/// not depend on the thread count.
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
                                EigenSolver solver = EigenSolver::ClosedForm);
 
