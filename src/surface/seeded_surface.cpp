@@ -314,12 +314,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         });
         trim();
     };
-    auto make_lookup = [&] {
-        return [values = Slots::Accessor(slots), &samples](const VoxelKey& v) mutable -> const VertexSample* {
-            const std::int32_t* slot = values.find(v);
-            return slot && *slot >= 0 ? &samples[static_cast<std::size_t>(*slot)] : nullptr;
-        };
-    };
+    auto make_lookup = [&] { return [corners = CornerEvaluator(shared)](const VoxelKey& v) mutable { return corners.sample(v); }; };
     SeededTsdf out;
     out.cubes = search.run(false, make_lookup, prepare);
     out.evaluated = samples.size();
