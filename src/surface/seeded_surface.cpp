@@ -106,27 +106,33 @@ public:
                 for (int y = -dilation; y <= dilation; ++y)
                     for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
     }
-    /// Runs the waves from wave(); `prepare(cubes)` is called before a wave of cubes is examined,
-    /// so that a lazy implementation can evaluate their corners first. `make_lookup()` gives a
-    /// lookup for one thread: a large wave is examined in parallel chunks, and the cubes they lead
-    /// to are visited in chunk order (the serial order). Returns the active cubes.
-    template <typename MakeLookup, typename Prepare>
-    std::vector<VoxelKey> run(bool seeding, MakeLookup&& make_lookup, Prepare&& prepare) {
-        constexpr std::size_t kChunk = 1024;
+    /// Runs the waves from wave(). A wave is examined in parallel chunks of `chunk` cubes, each
+    /// with its own `make_view()`: `view.evaluate_corners(cube)` makes the cube's corner values
+    /// available (false: the cube cannot be active, skip it) and `view.sample(v)` gives vertex
+    /// v's sample (nullptr if undefined). `before_wave(cubes)` and `after_wave()` run serially
+    /// around each wave. The cubes a wave leads to are visited in chunk order (the serial
+    /// order). Returns the active cubes.
+    template <typename MakeView, typename BeforeWave, typename AfterWave>
+    std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave,
+                              AfterWave&& after_wave) {
         std::vector<VoxelKey> next;
         std::vector<std::vector<VoxelKey>> actives, nexts;
         while (!wave_.empty()) {
-            prepare(wave_);
-            const std::size_t chunks = (wave_.size() + kChunk - 1) / kChunk;
+            before_wave(wave_);
+            const std::size_t chunks = (wave_.size() + chunk - 1) / chunk;
             actives.assign(chunks, {});
             nexts.assign(chunks, {});
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-                auto lookup = make_lookup();
-                for (std::size_t i = c * kChunk; i < std::min(wave_.size(), (c + 1) * kChunk); ++i)
+                auto view = make_view();
+                auto lookup = [&](const VoxelKey& v) { return view.sample(v); };
+                for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i) {
+                    if (!view.evaluate_corners(wave_[i])) continue;
                     classify_cube(
                         wave_[i], seeding, eps_, lookup, [&](const VoxelKey& a) { actives[c].push_back(a); },
                         [&](const VoxelKey& n) { nexts[c].push_back(n); });
+                }
             });
+            after_wave();
             next.clear();
             for (std::size_t c = 0; c < chunks; ++c) {
                 active_.insert(active_.end(), actives[c].begin(), actives[c].end());
@@ -153,8 +159,14 @@ private:
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation) {
     CubeSearch search(grid);
     search.seed(grid, dilation);
-    auto make_lookup = [&] { return [values = TsdfField::Accessor(field)](const VoxelKey& v) mutable { return values.find(v); }; };
-    return search.run(true, make_lookup, [](const std::vector<VoxelKey>&) {});
+    // Every vertex is already evaluated.
+    struct FieldView {
+        TsdfField::Accessor values;
+        bool evaluate_corners(const VoxelKey&) { return true; }
+        const VertexSample* sample(const VoxelKey& v) { return values.find(v); }
+    };
+    return search.run(
+        true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {}, [] {});
 }
 
 namespace {
@@ -299,24 +311,16 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         }
     }
     // The later waves (a quarter of the vertices, ~40 small waves): the corners' blocks are
-    // created serially, then each cube's corners are evaluated lazily in parallel; the search
-    // then classifies the wave.
-    auto prepare = [&](const std::vector<VoxelKey>& cubes) {
-        {
-            Slots::WriteAccessor slot_of(slots);
-            for (const VoxelKey& cube : cubes)
-                for (int c = 0; c < 8; ++c) slot_of[corner(cube, c)];
-        }
+    // created serially, then each cube's corners are evaluated lazily and the cube classified,
+    // in parallel chunks of a few cubes.
+    auto before_wave = [&](const std::vector<VoxelKey>& cubes) {
+        Slots::WriteAccessor slot_of(slots);
+        for (const VoxelKey& cube : cubes)
+            for (int c = 0; c < 8; ++c) slot_of[corner(cube, c)];
         make_room(8 * cubes.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cubes.size(), 8), [&](const auto& r) {
-            CornerEvaluator corners(shared);
-            for (std::size_t i = r.begin(); i != r.end(); ++i) corners.evaluate_corners(cubes[i]);
-        });
-        trim();
     };
-    auto make_lookup = [&] { return [corners = CornerEvaluator(shared)](const VoxelKey& v) mutable { return corners.sample(v); }; };
     SeededTsdf out;
-    out.cubes = search.run(false, make_lookup, prepare);
+    out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave, trim);
     out.evaluated = samples.size();
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
