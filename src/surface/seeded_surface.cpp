@@ -223,10 +223,14 @@ public:
         for (int c = 0; c < 8; ++c) defined(corner(cube, c));
         return true;
     }
-    /// The sample of an evaluated vertex, nullptr if undefined (or not evaluated).
+    /// The sample of an evaluated vertex, nullptr if undefined (or not evaluated). The slot is
+    /// read atomically: another thread may be trying to claim it at the same time (a failed
+    /// compare-and-swap, which ThreadSanitizer counts as a write).
     const VertexSample* sample(const VoxelKey& v) {
         const std::int32_t* slot = values_.find(v);
-        return slot && *slot >= 0 ? &s_.samples[static_cast<std::size_t>(*slot)] : nullptr;
+        if (!slot) return nullptr;
+        const std::int32_t state = std::atomic_ref<std::int32_t>(*const_cast<std::int32_t*>(slot)).load(std::memory_order_acquire);
+        return state >= 0 ? &s_.samples[static_cast<std::size_t>(state)] : nullptr;
     }
 
 private:
