@@ -106,6 +106,24 @@ public:
                 for (int y = -dilation; y <= dilation; ++y)
                     for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
     }
+    /// Examines one cube of a wave through `view` (see run()): its active part goes to `active`,
+    /// the cubes it leads to to `next`.
+    template <typename View>
+    void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next) const {
+        if (!view.evaluate_corners(cube)) return;  // a corner is undefined: not active, leads nowhere
+        classify_cube(
+            cube, seeding, eps_, [&](const VoxelKey& v) { return view.sample(v); }, [&](const VoxelKey& a) { active.push_back(a); },
+            [&](const VoxelKey& n) { next.push_back(n); });
+    }
+    /// Appends per-part results in part order: the active cubes, and the cubes they lead to,
+    /// visited into `out` (the serial order, whatever the thread count).
+    void absorb(const std::vector<std::vector<VoxelKey>>& actives, const std::vector<std::vector<VoxelKey>>& nexts,
+                std::vector<VoxelKey>& out) {
+        for (std::size_t c = 0; c < actives.size(); ++c) {
+            active_.insert(active_.end(), actives[c].begin(), actives[c].end());
+            for (const VoxelKey& n : nexts[c]) visit(n, out);
+        }
+    }
     /// Runs the waves from wave(). A wave is examined in parallel chunks of `chunk` cubes, each
     /// with its own `make_view()`: `view.evaluate_corners(cube)` makes the cube's corner values
     /// available (false: the cube cannot be active, skip it) and `view.sample(v)` gives vertex
@@ -124,20 +142,12 @@ public:
             nexts.assign(chunks, {});
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
                 auto view = make_view();
-                auto lookup = [&](const VoxelKey& v) { return view.sample(v); };
-                for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i) {
-                    if (!view.evaluate_corners(wave_[i])) continue;
-                    classify_cube(
-                        wave_[i], seeding, eps_, lookup, [&](const VoxelKey& a) { actives[c].push_back(a); },
-                        [&](const VoxelKey& n) { nexts[c].push_back(n); });
-                }
+                for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
+                    examine(view, wave_[i], seeding, actives[c], nexts[c]);
             });
             after_wave();
             next.clear();
-            for (std::size_t c = 0; c < chunks; ++c) {
-                active_.insert(active_.end(), actives[c].begin(), actives[c].end());
-                for (const VoxelKey& n : nexts[c]) visit(n, next);
-            }
+            absorb(actives, nexts, next);
             std::swap(wave_, next);
             seeding = false;
         }
@@ -179,7 +189,7 @@ namespace {
 class CornerEvaluator {
 public:
     using Slots = BlockMap<std::int32_t>;
-    static constexpr std::int32_t kUnevaluated = -1, kUndefined = -3, kBusy = -4;
+    static constexpr std::int32_t kUnevaluated = -1, kUndefined = -2, kBusy = -3;
 
     struct Shared {
         Slots& slots;
@@ -220,7 +230,10 @@ public:
     /// two probes are defined.
     bool evaluate_corners(const VoxelKey& cube) {
         if (!defined(even_corner(cube)) || !defined(odd_corner(cube))) return false;
-        for (int c = 0; c < 8; ++c) defined(corner(cube, c));
+        // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
+        const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
+        for (int c = 0; c < 8; ++c)
+            if (c != even && c != (7 ^ even)) defined(corner(cube, c));
         return true;
     }
     /// The sample of an evaluated vertex, nullptr if undefined (or not evaluated). The slot is
@@ -295,24 +308,16 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
             CornerEvaluator corners(shared);
-            auto lookup = [&](const VoxelKey& v) { return corners.sample(v); };
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(visited_block[i]);
                 for_each_bit(seeds[i].mask, [&](int offset) {
                     seen[static_cast<std::size_t>(offset)] = 1;
-                    const VoxelKey cube = Slots::key_at(seeds[i].block, offset);
-                    if (!corners.evaluate_corners(cube)) return;  // not active, leads nowhere
-                    classify_cube(
-                        cube, true, search.eps(), lookup, [&](const VoxelKey& c) { active[i].push_back(c); },
-                        [&](const VoxelKey& c) { next_cubes[i].push_back(c); });
+                    search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i]);
                 });
             }
         });
         trim();
-        for (std::size_t i = 0; i < seeds.size(); ++i) {
-            search.active().insert(search.active().end(), active[i].begin(), active[i].end());
-            for (const VoxelKey& c : next_cubes[i]) search.visit(c, search.wave());
-        }
+        search.absorb(active, next_cubes, search.wave());
     }
     // The later waves (a quarter of the vertices, ~40 small waves): the corners' blocks are
     // created serially, then each cube's corners are evaluated lazily and the cube classified,
@@ -332,8 +337,11 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     const std::size_t nblocks = slots.block_count();
     std::vector<std::size_t> block_start(nblocks + 1, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
-        for (std::size_t b = r.begin(); b != r.end(); ++b)
-            for (std::int32_t slot : slots.block_at(b)) block_start[b + 1] += slot >= 0;
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            std::size_t count = 0;
+            for (std::int32_t slot : slots.block_at(b)) count += slot >= 0;
+            block_start[b + 1] = count;
+        }
     });
     for (std::size_t b = 0; b < nblocks; ++b) block_start[b + 1] += block_start[b];
     const std::size_t defined = block_start[nblocks];
