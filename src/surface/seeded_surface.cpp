@@ -7,6 +7,7 @@
 #include <optional>
 #include <thread>
 
+#include <tbb/concurrent_vector.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -25,6 +26,21 @@ VoxelKey corner(const VoxelKey& base, int c) { return base + VoxelKey(c & 1, (c 
 // to odd per axis. Every cube has exactly one of each; they are the lazy evaluation's probes.
 VoxelKey even_corner(const VoxelKey& base) { return {base.x() + (base.x() & 1), base.y() + (base.y() & 1), base.z() + (base.z() & 1)}; }
 VoxelKey odd_corner(const VoxelKey& base) { return {base.x() + 1 - (base.x() & 1), base.y() + 1 - (base.y() & 1), base.z() + 1 - (base.z() & 1)}; }
+
+// Calls f(b) for each vertex block b that holds a corner of a cube whose base is in block
+// `block` at one of the offsets of `bases`: the block itself, and its neighbour +1 along each set
+// of axes on which some base is the block's last lattice point (offset 7).
+template <typename F>
+void for_each_corner_block(const VoxelKey& block, const BlockMask& bases, F&& f) {
+    constexpr std::uint64_t kLastX = 0x8080808080808080ull, kLastY = 0xff00000000000000ull;
+    for (int n = 0; n < 8; ++n) {
+        const int dx = n & 1, dy = (n >> 1) & 1, dz = n >> 2;
+        const std::uint64_t select = (dx ? kLastX : ~std::uint64_t{0}) & (dy ? kLastY : ~std::uint64_t{0});
+        std::uint64_t any = 0;
+        for (int z = dz ? 7 : 0; z < 8; ++z) any |= bases[static_cast<std::size_t>(z)] & select;
+        if (any) f(block + VoxelKey(dx, dy, dz));
+    }
+}
 
 // The 6 faces: corner indices and the direction to the neighbouring cube.
 struct Face {
@@ -181,11 +197,17 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
 
 namespace {
 
+// A defined vertex evaluated by the fast path.
+struct Evaluated {
+    VoxelKey key;
+    VertexSample sample;
+};
+
 // Lazy, concurrent evaluation of vertices for the fast path (one object per task). A vertex's
 // slot in `slots` is kUnevaluated, kBusy (a thread is evaluating it), kUndefined, or the index
-// of its sample. The first thread to need a vertex claims and evaluates it; another one needing
-// it meanwhile waits for the value. Blocks of `slots` must exist before (their creation is not
-// concurrent), and keys / samples must have room for every vertex evaluated.
+// of its entry in `defined` (a concurrent vector: appending does not move the entries). The first
+// thread to need a vertex claims and evaluates it; another one needing it meanwhile waits for the
+// value. Blocks of `slots` must exist before (their creation is not concurrent).
 class CornerEvaluator {
 public:
     using Slots = BlockMap<std::int32_t>;
@@ -198,9 +220,8 @@ public:
         Eigen::Vector3d sensor_local;
         EigenSolver solver;
         double truncation;
-        std::vector<VoxelKey>& keys;
-        std::vector<VertexSample>& samples;
-        std::atomic<std::size_t>& next;  ///< next free index in keys / samples
+        tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>>& defined;
+        std::atomic<std::size_t>& evaluated;  ///< vertices evaluated, defined or not
     };
     explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots) {}
 
@@ -211,11 +232,10 @@ public:
         std::int32_t state = slot.load(std::memory_order_acquire);
         if (state == kUnevaluated && slot.compare_exchange_strong(state, kBusy, std::memory_order_acq_rel)) {
             VertexSample sample = evaluate_vertex(window(Slots::block_of(v)), v, s_.config, s_.sensor_local, s_.solver);
-            if (sample.defined && !(std::fabs(sample.tsdf) <= s_.truncation)) sample.defined = false;  // as assemble_field
-            const std::size_t at = s_.next.fetch_add(1, std::memory_order_relaxed);
-            s_.keys[at] = v;
-            s_.samples[at] = sample;
-            state = sample.defined ? static_cast<std::int32_t>(at) : kUndefined;
+            s_.evaluated.fetch_add(1, std::memory_order_relaxed);
+            state = kUndefined;
+            if (sample.defined && std::fabs(sample.tsdf) <= s_.truncation)  // truncation as assemble_field
+                state = static_cast<std::int32_t>(s_.defined.push_back({v, sample}) - s_.defined.begin());
             slot.store(state, std::memory_order_release);
         }
         while (state == kBusy) {
@@ -243,7 +263,7 @@ public:
         const std::int32_t* slot = values_.find(v);
         if (!slot) return nullptr;
         const std::int32_t state = std::atomic_ref<std::int32_t>(*const_cast<std::int32_t*>(slot)).load(std::memory_order_acquire);
-        return state >= 0 ? &s_.samples[static_cast<std::size_t>(state)] : nullptr;
+        return state >= 0 ? &s_.defined[static_cast<std::size_t>(state)].sample : nullptr;
     }
 
 private:
@@ -272,39 +292,26 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     using Slots = CornerEvaluator::Slots;
     Slots slots(CornerEvaluator::kUnevaluated);
     slots.reserve_blocks(grid.index().block_count() * 2);
-    std::vector<VoxelKey> keys;  // the vertices evaluated, in evaluation order (any), and their samples
-    std::vector<VertexSample> samples;
-    std::atomic<std::size_t> next{0};
+    tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>> defined_vertices;  // in evaluation order (any)
+    defined_vertices.reserve(4 * grid.size());  // ~3 per occupied voxel on lidar frames; more grows it
+    std::atomic<std::size_t> evaluated{0};
     const PackedVoxels packed(grid);
     const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
-                                         keys, samples, next};
-    // Room for `more` vertices; trimmed back after each parallel pass.
-    auto make_room = [&](std::size_t more) {
-        keys.resize(next.load() + more);
-        samples.resize(next.load() + more);
-    };
-    auto trim = [&] {
-        keys.resize(next.load());
-        samples.resize(next.load());
-    };
+                                         defined_vertices, evaluated};
     CubeSearch search(grid);
 
     // Wave 0, the seeds (three quarters of the vertices on a lidar frame), in parallel per block:
-    // the seed cubes are the occupied voxels dilated by [-d, d] and their corners the occupied
-    // voxels dilated by [-d, d + 1] (block masks, no per-cube hashing). Each seed cube's corners
-    // are evaluated lazily, then the cube is classified; the cubes it leads to are visited
-    // serially, in block order.
+    // the seed cubes are the occupied voxels dilated by [-d, d] (block masks, no per-cube
+    // hashing). Each seed cube's corners are evaluated lazily, then the cube is classified; the
+    // cubes it leads to are visited serially, in block order.
     const int d = config.seed_dilation;
     {
-        std::size_t corner_count = 0;
-        for (const MaskedBlock& m : dilated_occupancy(grid, -d, d + 1)) {
-            slots.block_index(m.block);
-            corner_count += static_cast<std::size_t>(popcount(m.mask));
-        }
-        make_room(corner_count);
         const std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);
         std::vector<std::uint32_t> visited_block(seeds.size());
-        for (std::size_t i = 0; i < seeds.size(); ++i) visited_block[i] = search.visited().block_index(seeds[i].block);
+        for (std::size_t i = 0; i < seeds.size(); ++i) {
+            visited_block[i] = search.visited().block_index(seeds[i].block);
+            for_each_corner_block(seeds[i].block, seeds[i].mask, [&](const VoxelKey& b) { slots.block_index(b); });
+        }
         std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
             CornerEvaluator corners(shared);
@@ -316,21 +323,28 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                 });
             }
         });
-        trim();
         search.absorb(active, next_cubes, search.wave());
     }
     // The later waves (a quarter of the vertices, ~40 small waves): the corners' blocks are
-    // created serially, then each cube's corners are evaluated lazily and the cube classified,
-    // in parallel chunks of a few cubes.
+    // created serially (one lookup per cube unless it is a block's last on some axis, or the
+    // block changes), then each cube's corners are evaluated lazily and the cube classified, in
+    // parallel chunks of a few cubes.
     auto before_wave = [&](const std::vector<VoxelKey>& cubes) {
-        Slots::WriteAccessor slot_of(slots);
-        for (const VoxelKey& cube : cubes)
-            for (int c = 0; c < 8; ++c) slot_of[corner(cube, c)];
-        make_room(8 * cubes.size());
+        std::optional<VoxelKey> last;
+        for (const VoxelKey& cube : cubes) {
+            constexpr int m = Slots::kSize - 1;
+            const VoxelKey block = Slots::block_of(cube);
+            const bool inner = (cube.x() & m) != m && (cube.y() & m) != m && (cube.z() & m) != m;  // all corners in `block`
+            if (inner && last == block) continue;
+            BlockMask base{};
+            base[static_cast<std::size_t>(cube.z() & m)] = std::uint64_t{1} << (Slots::offset_of(cube) & 63);
+            for_each_corner_block(block, base, [&](const VoxelKey& b) { slots.block_index(b); });
+            last = block;
+        }
     };
     SeededTsdf out;
-    out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave, trim);
-    out.evaluated = samples.size();
+    out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave, [] {});
+    out.evaluated = evaluated.load();
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
     // offset), which does not depend on the thread count.
@@ -352,10 +366,10 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             std::size_t at = block_start[b];
             for (std::int32_t& slot : slots.block_at(b))
                 if (slot >= 0) {
-                    const auto i = static_cast<std::size_t>(slot);
+                    const Evaluated& e = defined_vertices[static_cast<std::size_t>(slot)];
                     slot = static_cast<std::int32_t>(at);
-                    field_keys[at] = keys[i];
-                    field_samples[at] = samples[i];
+                    field_keys[at] = e.key;
+                    field_samples[at] = e.sample;
                     ++at;
                 }
         }
