@@ -54,8 +54,7 @@ std::int32_t VoxelGrid::voxel_index(const VoxelKey& key) {
     std::int32_t& slot = (*last_block_)[static_cast<std::size_t>(offset)];
     if (slot < 0) {
         (*last_occupancy_)[static_cast<std::size_t>(offset >> 6)] |= std::uint64_t{1} << (offset & 63);
-        slot = static_cast<std::int32_t>(stats_.size());
-        stats_.emplace_back();
+        slot = static_cast<std::int32_t>(keys_.size());
         keys_.push_back(key);
     }
     return slot;
@@ -65,7 +64,9 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     if (!world.allFinite()) throw InvalidInput("point coordinates must be finite");
     set_origin_from(world);
     const Eigen::Vector3d local = world - origin_;
-    stats_[static_cast<std::size_t>(voxel_index(key_of_local(local)))].add(local);
+    const auto v = static_cast<std::size_t>(voxel_index(key_of_local(local)));
+    if (v >= stats_.size()) stats_.resize(v + 1);
+    stats_[v].add(local);
     ++points_;
 }
 
@@ -95,6 +96,7 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points) {
         else
             ++dropped;
     }
+    stats_.resize(keys_.size());  // the new voxels, empty
     // 3. The points of each voxel, in point order (counting sort), then Welford's update per voxel
     //    in parallel: each voxel sees its points in the order one-by-one insertion gives it, so the
     //    statistics are identical to the last bit.

@@ -77,7 +77,8 @@ public:
 
 private:
     void set_origin_from(const Eigen::Vector3d& world);
-    /// Index into stats_ of the voxel `key`, created (empty) if absent.
+    /// Index of the voxel `key`, created if absent: its key is appended to keys_, and the caller
+    /// extends stats_ to keys_.size() (once per batch rather than once per new voxel).
     std::int32_t voxel_index(const VoxelKey& key);
 
     double alpha_;
