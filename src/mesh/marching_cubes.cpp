@@ -58,8 +58,7 @@ struct VertexId {
     VoxelKey base;
     int axis;
 };
-constexpr std::uint32_t kNone = 0xffffffffu;
-using WeldSlots = std::array<std::uint32_t, 4>;
+constexpr std::uint32_t kNone = BlockIndex::kAbsent;
 
 class MeshBuilder {
 public:
@@ -129,13 +128,20 @@ public:
     const Mesh& mesh() const { return mesh_; }
     /// Lattice identity of each mesh vertex, in creation order (axis 4: a loop centroid).
     const std::vector<VertexId>& vertex_ids() const { return vertex_ids_; }
-    /// Mesh index of the vertex with identity `id`, or kNone.
+    /// Mesh index of the vertex with identity `id` (axis 0 to 3), or kNone.
     std::uint32_t find(const VertexId& id) const {
-        const WeldSlots* slots = ids_.find(id.base);
-        return slots ? (*slots)[static_cast<std::size_t>(id.axis)] : kNone;
+        const VertexSample* s = field_.find(id.base);
+        return s ? ids_.find(weld_key(*s, id.axis)) : kNone;
     }
 
 private:
+    // The welding table's key for a vertex on lattice vertex v (sample s) and axis 0 to 3: v's
+    // index in the field (split over two components so it is not truncated) and the axis.
+    VoxelKey weld_key(const VertexSample& s, int axis) const {
+        const auto i = static_cast<std::size_t>(&s - field_.samples().data());
+        return {static_cast<int>(i & 0xfffffu), static_cast<int>(i >> 20), axis};
+    }
+
     // Fans the loop from a vertex none of whose chords joins two edges of a common cube face.
     // Such chords cross the cube's interior, so no other cube can produce them, and every mesh edge
     // is then shared by exactly two triangles (a face segment: this cube and its neighbour; a chord
@@ -175,9 +181,8 @@ private:
         VertexId id{a, axis};
         if (t <= 0) id = {a, 3};
         else if (t >= 1) id = {b, 3};
-        std::uint32_t& slot = ids_[id.base][static_cast<std::size_t>(id.axis)];
-        if (slot != kNone) return slot;
-        slot = static_cast<std::uint32_t>(mesh_.vertices.size());
+        const auto [slot, added] = ids_.try_emplace(weld_key(id.base == b ? sb : sa, id.axis), static_cast<std::uint32_t>(mesh_.vertices.size()));
+        if (!added) return slot;
         vertex_ids_.push_back(id);
 
         const double tc = id.axis == 3 ? (t <= 0 ? 0.0 : 1.0) : t;
@@ -211,7 +216,7 @@ private:
     VertexPlacement placement_;
     Mesh mesh_;
     TsdfField::Accessor lookup_;
-    BlockMap<WeldSlots> ids_{WeldSlots{kNone, kNone, kNone, kNone}};
+    BlockIndex ids_;  // weld_key -> mesh vertex
     std::vector<VertexId> vertex_ids_;
 };
 
