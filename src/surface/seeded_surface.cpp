@@ -123,14 +123,20 @@ public:
                     for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
     }
     /// Examines one cube of a wave through `view` (see run()): its active part goes to `active`,
-    /// the cubes it leads to to `next`.
+    /// the cubes it leads to to `next`, less those already visited (most of them: this filter
+    /// runs in parallel, so absorb(), which is serial, has fewer cubes to visit).
     template <typename View>
     void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next) const {
         if (!view.evaluate_corners(cube)) return;  // a corner is undefined: not active, leads nowhere
+        BlockMap<std::uint8_t>::Accessor seen(visited_);
         classify_cube(
             cube, seeding, eps_, [&](const VoxelKey& v) { return view.sample(v); }, [&](const VoxelKey& a) { active.push_back(a); },
-            [&](const VoxelKey& n) { next.push_back(n); });
+            [&](const VoxelKey& n) {
+                if (!visited_already(seen, n)) next.push_back(n);
+            });
     }
+    /// Marks a seed cube visited during the seed wave, while other threads may read its flag.
+    static void mark_seed(std::uint8_t& flag) { std::atomic_ref<std::uint8_t>(flag).store(1, std::memory_order_relaxed); }
     /// Appends per-part results in part order: the active cubes, and the cubes they lead to,
     /// visited into `out` (the serial order, whatever the thread count).
     void absorb(const std::vector<std::vector<VoxelKey>>& actives, const std::vector<std::vector<VoxelKey>>& nexts,
@@ -174,6 +180,13 @@ public:
     }
 
 private:
+    // Whether `cube` is visited (a seed already marked, or a cube of an earlier wave). False may
+    // be stale (a seed another thread has not marked yet): absorb() decides.
+    static bool visited_already(BlockMap<std::uint8_t>::Accessor& seen, const VoxelKey& cube) {
+        const std::uint8_t* flag = seen.find(cube);
+        return flag && std::atomic_ref<std::uint8_t>(*const_cast<std::uint8_t*>(flag)).load(std::memory_order_relaxed) != 0;
+    }
+
     double eps_;
     BlockMap<std::uint8_t> visited_{0};
     BlockMap<std::uint8_t>::WriteAccessor seen_of_;
@@ -318,7 +331,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(visited_block[i]);
                 for_each_bit(seeds[i].mask, [&](int offset) {
-                    seen[static_cast<std::size_t>(offset)] = 1;
+                    CubeSearch::mark_seed(seen[static_cast<std::size_t>(offset)]);
                     search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i]);
                 });
             }
