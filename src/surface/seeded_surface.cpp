@@ -65,20 +65,18 @@ bool zyx_less(const VoxelKey& a, const VoxelKey& b) {
     return a.x() < b.x();
 }
 
-// What one cube of a wave tells the search, given `lookup(v)`, the sample of vertex v (nullptr if
-// undefined): active(cube) when the surface crosses it, and next(c) for each cube it leads to,
-// through each face the surface crosses. A surface through a seed's corner (|value| <= eps, e.g.
-// data lying on a lattice plane) may cross only the neighbouring cubes (zero counts as
-// positive): when `seeding`, the 8 cubes around such a corner are next as well.
-template <typename Lookup, typename Active, typename Next>
-void classify_cube(const VoxelKey& cube, bool seeding, double eps, Lookup&& lookup, Active&& active, Next&& next) {
-    std::array<const VertexSample*, 8> s{};
+// The samples of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2), nullptr if undefined).
+using CornerSamples = std::array<const VertexSample*, 8>;
+
+// What one cube of a wave tells the search, given its corners' samples `s`, all defined:
+// active(cube) when the surface crosses it, and next(c) for each cube it leads to, through each
+// face the surface crosses. A surface through a seed's corner (|value| <= eps, e.g. data lying on
+// a lattice plane) may cross only the neighbouring cubes (zero counts as positive): when
+// `seeding`, the 8 cubes around such a corner are next as well.
+template <typename Active, typename Next>
+void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerSamples& s, Active&& active, Next&& next) {
     int negatives = 0;
-    for (int c = 0; c < 8; ++c) {
-        s[c] = lookup(corner(cube, c));
-        if (!s[c]) return;
-        negatives += s[c]->tsdf < 0;
-    }
+    for (int c = 0; c < 8; ++c) negatives += s[c]->tsdf < 0;
     if (negatives == 0 || negatives == 8) {
         if (!seeding) return;
         for (int c = 0; c < 8; ++c) {
@@ -127,10 +125,11 @@ public:
     /// runs in parallel, so absorb(), which is serial, has fewer cubes to visit).
     template <typename View>
     void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next) const {
-        if (!view.evaluate_corners(cube)) return;  // a corner is undefined: not active, leads nowhere
+        CornerSamples s;
+        if (!view.corners(cube, s)) return;  // a corner is undefined: not active, leads nowhere
         BlockMap<std::uint8_t>::Accessor seen(visited_);
         classify_cube(
-            cube, seeding, eps_, [&](const VoxelKey& v) { return view.sample(v); }, [&](const VoxelKey& a) { active.push_back(a); },
+            cube, seeding, eps_, s, [&](const VoxelKey& a) { active.push_back(a); },
             [&](const VoxelKey& n) {
                 if (!visited_already(seen, n)) next.push_back(n);
             });
@@ -147,14 +146,12 @@ public:
         }
     }
     /// Runs the waves from wave(). A wave is examined in parallel chunks of `chunk` cubes, each
-    /// with its own `make_view()`: `view.evaluate_corners(cube)` makes the cube's corner values
-    /// available (false: the cube cannot be active, skip it) and `view.sample(v)` gives vertex
-    /// v's sample (nullptr if undefined). `before_wave(cubes)` and `after_wave()` run serially
-    /// around each wave. The cubes a wave leads to are visited in chunk order (the serial
-    /// order). Returns the active cubes.
-    template <typename MakeView, typename BeforeWave, typename AfterWave>
-    std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave,
-                              AfterWave&& after_wave) {
+    /// with its own `make_view()`: `view.corners(cube, s)` sets the samples of the cube's corners
+    /// and returns whether they are all defined (false: the cube cannot be active, skip it; `s`
+    /// may then be incomplete). `before_wave(cubes)` runs serially before each wave. The cubes a
+    /// wave leads to are visited in chunk order (the serial order). Returns the active cubes.
+    template <typename MakeView, typename BeforeWave>
+    std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave) {
         std::vector<VoxelKey> next;
         std::vector<std::vector<VoxelKey>> actives, nexts;
         while (!wave_.empty()) {
@@ -167,7 +164,6 @@ public:
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
                     examine(view, wave_[i], seeding, actives[c], nexts[c]);
             });
-            after_wave();
             next.clear();
             absorb(actives, nexts, next);
             std::swap(wave_, next);
@@ -201,11 +197,13 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
     // Every vertex is already evaluated.
     struct FieldView {
         TsdfField::Accessor values;
-        bool evaluate_corners(const VoxelKey&) { return true; }
-        const VertexSample* sample(const VoxelKey& v) { return values.find(v); }
+        bool corners(const VoxelKey& cube, CornerSamples& s) {
+            for (int c = 0; c < 8; ++c)
+                if (!(s[c] = values.find(corner(cube, c)))) return false;
+            return true;
+        }
     };
-    return search.run(
-        true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {}, [] {});
+    return search.run(true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {});
 }
 
 namespace {
@@ -238,8 +236,8 @@ public:
     };
     explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots) {}
 
-    /// Whether vertex v is defined, evaluating it if nobody has.
-    bool defined(const VoxelKey& v) {
+    /// Vertex v's sample (nullptr if undefined), evaluating it if nobody has.
+    const VertexSample* sample(const VoxelKey& v) {
         // The block exists and is not const: the accessor only caches it.
         std::atomic_ref<std::int32_t> slot(*const_cast<std::int32_t*>(values_.find(v)));
         std::int32_t state = slot.load(std::memory_order_acquire);
@@ -255,28 +253,20 @@ public:
             std::this_thread::yield();
             state = slot.load(std::memory_order_acquire);
         }
-        return state >= 0;
+        return state >= 0 ? &s_.defined[static_cast<std::size_t>(state)].sample : nullptr;
     }
-    /// Evaluates the corners of `cube`. A cube with an undefined corner cannot be active, so
-    /// lazily: its all-even corner, its all-odd corner if that one is defined, then the other
-    /// six if both are (every cube has exactly one corner of each parity). Returns whether the
-    /// two probes are defined.
-    bool evaluate_corners(const VoxelKey& cube) {
-        if (!defined(even_corner(cube)) || !defined(odd_corner(cube))) return false;
+    /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
+    /// undefined corner cannot be active, so they are evaluated lazily: its all-even corner, its
+    /// all-odd corner if that one is defined, then the other six if both are (every cube has
+    /// exactly one corner of each parity).
+    bool corners(const VoxelKey& cube, CornerSamples& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
+        if (!(s[even] = sample(even_corner(cube))) || !(s[7 ^ even] = sample(odd_corner(cube)))) return false;
+        bool all = true;
         for (int c = 0; c < 8; ++c)
-            if (c != even && c != (7 ^ even)) defined(corner(cube, c));
-        return true;
-    }
-    /// The sample of an evaluated vertex, nullptr if undefined (or not evaluated). The slot is
-    /// read atomically: another thread may be trying to claim it at the same time (a failed
-    /// compare-and-swap, which ThreadSanitizer counts as a write).
-    const VertexSample* sample(const VoxelKey& v) {
-        const std::int32_t* slot = values_.find(v);
-        if (!slot) return nullptr;
-        const std::int32_t state = std::atomic_ref<std::int32_t>(*const_cast<std::int32_t*>(slot)).load(std::memory_order_acquire);
-        return state >= 0 ? &s_.defined[static_cast<std::size_t>(state)].sample : nullptr;
+            if (c != even && c != (7 ^ even)) all &= (s[c] = sample(corner(cube, c))) != nullptr;
+        return all;
     }
 
 private:
@@ -356,7 +346,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         }
     };
     SeededTsdf out;
-    out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave, [] {});
+    out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave);
     out.evaluated = evaluated.load();
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
