@@ -256,17 +256,17 @@ public:
         return state >= 0 ? &s_.defined[static_cast<std::size_t>(state)].sample : nullptr;
     }
     /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
-    /// undefined corner cannot be active, so they are evaluated lazily: its all-even corner, its
-    /// all-odd corner if that one is defined, then the other six if both are (every cube has
-    /// exactly one corner of each parity).
+    /// undefined corner cannot be active, so they are evaluated lazily, stopping at the first
+    /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
+    /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
+    /// only on their values, so the set of evaluated vertices does not depend on the order.
     bool corners(const VoxelKey& cube, CornerSamples& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
         if (!(s[even] = sample(even_corner(cube))) || !(s[7 ^ even] = sample(odd_corner(cube)))) return false;
-        bool all = true;
         for (int c = 0; c < 8; ++c)
-            if (c != even && c != (7 ^ even)) all &= (s[c] = sample(corner(cube, c))) != nullptr;
-        return all;
+            if (c != even && c != (7 ^ even) && !(s[c] = sample(corner(cube, c)))) return false;
+        return true;
     }
 
 private:
