@@ -58,11 +58,17 @@ struct VertexId {
     VoxelKey base;
     int axis;
 };
-constexpr std::uint32_t kNone = BlockIndex::kAbsent;
+constexpr std::uint32_t kNone = 0xffffffffu;
+// Mesh vertex per axis 0 to 3 of a lattice vertex, indexed by the vertex's position in the field.
+using WeldSlots = std::array<std::uint32_t, 4>;
+using WeldTable = std::vector<WeldSlots>;
 
 class MeshBuilder {
 public:
-    MeshBuilder(const TsdfField& field, VertexPlacement placement) : field_(field), placement_(placement), lookup_(field) {}
+    /// `ids` (field.size() entries, kNone) welds the edge vertices; builders running at the same
+    /// time must not share a lattice vertex if they share `ids`.
+    MeshBuilder(const TsdfField& field, VertexPlacement placement, WeldTable& ids)
+        : field_(field), placement_(placement), lookup_(field), ids_(ids) {}
 
     void process_cube(const VoxelKey& base) {
         std::array<const VertexSample*, 8> s{};
@@ -131,16 +137,12 @@ public:
     /// Mesh index of the vertex with identity `id` (axis 0 to 3), or kNone.
     std::uint32_t find(const VertexId& id) const {
         const VertexSample* s = field_.find(id.base);
-        return s ? ids_.find(weld_key(*s, id.axis)) : kNone;
+        return s ? ids_[index_of(*s)][static_cast<std::size_t>(id.axis)] : kNone;
     }
 
 private:
-    // The welding table's key for a vertex on lattice vertex v (sample s) and axis 0 to 3: v's
-    // index in the field (split over two components so it is not truncated) and the axis.
-    VoxelKey weld_key(const VertexSample& s, int axis) const {
-        const auto i = static_cast<std::size_t>(&s - field_.samples().data());
-        return {static_cast<int>(i & 0xfffffu), static_cast<int>(i >> 20), axis};
-    }
+    // Position in the field of the lattice vertex whose sample is s.
+    std::size_t index_of(const VertexSample& s) const { return static_cast<std::size_t>(&s - field_.samples().data()); }
 
     // Fans the loop from a vertex none of whose chords joins two edges of a common cube face.
     // Such chords cross the cube's interior, so no other cube can produce them, and every mesh edge
@@ -181,8 +183,9 @@ private:
         VertexId id{a, axis};
         if (t <= 0) id = {a, 3};
         else if (t >= 1) id = {b, 3};
-        const auto [slot, added] = ids_.try_emplace(weld_key(id.base == b ? sb : sa, id.axis), static_cast<std::uint32_t>(mesh_.vertices.size()));
-        if (!added) return slot;
+        std::uint32_t& slot = ids_[index_of(id.base == b ? sb : sa)][static_cast<std::size_t>(id.axis)];
+        if (slot != kNone) return slot;
+        slot = static_cast<std::uint32_t>(mesh_.vertices.size());
         vertex_ids_.push_back(id);
 
         const double tc = id.axis == 3 ? (t <= 0 ? 0.0 : 1.0) : t;
@@ -216,14 +219,15 @@ private:
     VertexPlacement placement_;
     Mesh mesh_;
     TsdfField::Accessor lookup_;
-    BlockIndex ids_;  // weld_key -> mesh vertex
+    WeldTable& ids_;
     std::vector<VertexId> vertex_ids_;
 };
 
 }  // namespace
 
 Mesh extract_mesh(const TsdfField& field, VertexPlacement placement) {
-    MeshBuilder builder(field, placement);
+    WeldTable ids(field.size(), WeldSlots{kNone, kNone, kNone, kNone});
+    MeshBuilder builder(field, placement, ids);
     // Every defined vertex is tried as the minimum corner of a cube; sorted keys give a
     // deterministic vertex and triangle order.
     for (const VoxelKey& v : field.keys()) builder.process_cube(v);
@@ -250,14 +254,18 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
         }
     starts.push_back(cubes.size());
     const std::size_t runs = starts.size() - 1;
+    // Runs r and r + 2 share no lattice vertex, so two tables, by the run's parity, are enough.
+    std::array<WeldTable, 2> weld;
+    weld[0].assign(field.size(), WeldSlots{kNone, kNone, kNone, kNone});
+    if (runs > 1) weld[1] = weld[0];
     if (runs == 1) {
-        MeshBuilder builder(field, placement);
+        MeshBuilder builder(field, placement, weld[0]);
         for (const VoxelKey& v : cubes) builder.process_cube(v);
         return builder.take();
     }
     std::vector<std::unique_ptr<MeshBuilder>> builders(runs);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
-        builders[r] = std::make_unique<MeshBuilder>(field, placement);
+        builders[r] = std::make_unique<MeshBuilder>(field, placement, weld[r % 2]);
         for (std::size_t i = starts[r]; i < starts[r + 1]; ++i) builders[r]->process_cube(cubes[i]);
     });
     // Global index of each run's vertices, and where each run's new vertices and triangles go.
