@@ -296,7 +296,10 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     Slots slots(CornerEvaluator::kUnevaluated);
     slots.reserve_blocks(grid.index().block_count() * 2);
     tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>> defined_vertices;  // in evaluation order (any)
-    defined_vertices.reserve(4 * grid.size());  // ~3 per occupied voxel on lidar frames; more grows it
+    // ~3 per occupied voxel on lidar frames (more grows it). One block reserved up front costs
+    // page faults only where written, and avoids the growth's smaller blocks (measured: 10k more
+    // page faults per 16 frames without it); capped so a huge grid does not reserve gigabytes.
+    defined_vertices.reserve(std::min<std::size_t>(4 * grid.size(), std::size_t{1} << 22));
     std::atomic<std::size_t> evaluated{0};
     const PackedVoxels packed(grid);
     const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
