@@ -208,11 +208,12 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
 
 namespace {
 
-// A defined vertex evaluated by the fast path.
+// A defined vertex evaluated by the fast path, and where they are kept (in evaluation order).
 struct Evaluated {
     VoxelKey key;
     VertexSample sample;
 };
+using EvaluatedStore = tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>>;
 
 // Lazy, concurrent evaluation of vertices for the fast path (one object per task). A vertex's
 // slot in `slots` is kUnevaluated, kBusy (a thread is evaluating it), kUndefined, or the index
@@ -231,7 +232,7 @@ public:
         Eigen::Vector3d sensor_local;
         EigenSolver solver;
         double truncation;
-        tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>>& defined;
+        EvaluatedStore& defined;
         std::atomic<std::size_t>& evaluated;  ///< vertices evaluated, defined or not
     };
     explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots) {}
@@ -295,7 +296,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     using Slots = CornerEvaluator::Slots;
     Slots slots(CornerEvaluator::kUnevaluated);
     slots.reserve_blocks(grid.index().block_count() * 2);
-    tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>> defined_vertices;  // in evaluation order (any)
+    EvaluatedStore defined_vertices;
     // ~3 per occupied voxel on lidar frames (more grows it). One block reserved up front costs
     // page faults only where written, and avoids the growth's smaller blocks (measured: 10k more
     // page faults per 16 frames without it); capped so a huge grid does not reserve gigabytes.
