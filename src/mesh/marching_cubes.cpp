@@ -62,6 +62,8 @@ constexpr std::uint32_t kNone = 0xffffffffu;
 // Mesh vertex per axis 0 to 3 of a lattice vertex, indexed by the vertex's position in the field.
 using WeldSlots = std::array<std::uint32_t, 4>;
 using WeldTable = std::vector<WeldSlots>;
+// A welding table for `field` with no vertex yet.
+WeldTable empty_weld_table(const TsdfField& field) { return WeldTable(field.size(), WeldSlots{kNone, kNone, kNone, kNone}); }
 
 class MeshBuilder {
 public:
@@ -226,8 +228,8 @@ private:
 }  // namespace
 
 Mesh extract_mesh(const TsdfField& field, VertexPlacement placement) {
-    WeldTable ids(field.size(), WeldSlots{kNone, kNone, kNone, kNone});
-    MeshBuilder builder(field, placement, ids);
+    WeldTable weld = empty_weld_table(field);
+    MeshBuilder builder(field, placement, weld);
     // Every defined vertex is tried as the minimum corner of a cube; sorted keys give a
     // deterministic vertex and triangle order.
     for (const VoxelKey& v : field.keys()) builder.process_cube(v);
@@ -255,9 +257,7 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
     starts.push_back(cubes.size());
     const std::size_t runs = starts.size() - 1;
     // Runs r and r + 2 share no lattice vertex, so two tables, by the run's parity, are enough.
-    std::array<WeldTable, 2> weld;
-    weld[0].assign(field.size(), WeldSlots{kNone, kNone, kNone, kNone});
-    if (runs > 1) weld[1] = weld[0];
+    std::array<WeldTable, 2> weld{empty_weld_table(field), runs > 1 ? empty_weld_table(field) : WeldTable{}};
     if (runs == 1) {
         MeshBuilder builder(field, placement, weld[0]);
         for (const VoxelKey& v : cubes) builder.process_cube(v);
