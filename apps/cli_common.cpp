@@ -61,10 +61,12 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
     app->add_option("--mode", o.mode, "an+gc | an | cn+gc | cn (Sec. IV-B)")->capture_default_str();
     app->add_option("--origin", o.origin, "Sensor position x,y,z (orients the normals, Eq. 2)")->capture_default_str();
     auto* literal = app->add_flag("--literal", o.literal,
-                                  "The paper as written: no planarity or thickness guard, no truncation, every defined cube, no snapping");
+                                  "The paper as written: no planarity or thickness guard, no slab fallback, no truncation, every defined cube, no snapping");
     for (auto* opt : {
              app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"),
              app->add_option("--max-thickness", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"),
+             app->add_option("--slab", c.slab_from_level,
+                             "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"),
              app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"),
              app->add_option("--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"),
              app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"),

@@ -65,7 +65,9 @@ std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base) 
     rows.push_back(method_row("+trunc 1", c));
     c.snap_to_plane = base.snap_to_plane;
     c.min_component_triangles = base.min_component_triangles;
-    rows.push_back(method_row("+snap (default)", c));
+    rows.push_back(method_row("+snap", c));
+    c.slab_from_level = base.slab_from_level;
+    rows.push_back(method_row("+slab (default)", c));
     for (int k : {3, 7}) {
         ReconstructionConfig ck = base;
         ck.k_max = k;

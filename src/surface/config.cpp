@@ -39,6 +39,7 @@ ReconstructionConfig ReconstructionConfig::paper(Mode mode) {
 void ReconstructionConfig::make_paper_literal() {
     min_planarity = 0;
     max_thickness = 0;
+    slab_from_level = 0;
     truncation_voxels = 0;
     seeded_surface = false;
     snap_to_plane = false;
@@ -60,6 +61,8 @@ void ReconstructionConfig::validate() const {
         fail("min_planarity must be in [0, 1) (got " + std::to_string(min_planarity) + ")");
     if (!std::isfinite(max_thickness) || max_thickness < 0 || max_thickness > 1e3)
         fail("max thickness must be within [0, 1e3] voxels (0 disables it; got " + std::to_string(max_thickness) + ")");
+    if (slab_from_level != 0 && (slab_from_level < 2 || slab_from_level > kMaxNeighbourhoodLevel))
+        fail("slab fallback level must be 0 (off) or in [2, " + std::to_string(kMaxNeighbourhoodLevel) + "] (got " + std::to_string(slab_from_level) + ")");
     if (min_component_triangles < 0) fail("min component triangles must be >= 0 (got " + std::to_string(min_component_triangles) + ")");
     if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
         fail("truncation must be finite and >= 0 voxels (0 disables it; got " + std::to_string(truncation_voxels) + ")");

@@ -4,12 +4,20 @@
 
 namespace lidarsurf {
 
+VoxelStats merge_box(const VoxelGrid& grid, const VoxelBox& box) {
+    VoxelStats acc;
+    grid.for_each_in_box(box.lo, box.hi, [&](const VoxelKey&, const VoxelStats& s) { acc.merge(s); });
+    return acc;
+}
+
 VoxelStats merge_neighbourhood(const VoxelGrid& grid, const VoxelKey& v, int k) {
     if (k < 1) throw InvalidArgument("neighbourhood level must be >= 1");
-    VoxelStats acc;
-    const VoxelKey lo = v.array() - k, hi = v.array() + (k - 1);  // [v-k, v+k-1]^3
-    grid.for_each_in_box(lo, hi, [&](const VoxelKey&, const VoxelStats& s) { acc.merge(s); });
-    return acc;
+    return merge_box(grid, {v.array() - k, v.array() + (k - 1)});  // [v-k, v+k-1]^3
+}
+
+VoxelBox slab_box(const VoxelKey& v, int k) {
+    if (k < 1) throw InvalidArgument("neighbourhood level must be >= 1");
+    return {{v.x() - k, v.y() - k, v.z() - 1}, {v.x() + k - 1, v.y() + k - 1, v.z()}};
 }
 
 std::array<VoxelBox, 6> shell_boxes(const VoxelKey& v, int k) {

@@ -4,6 +4,7 @@
 #include <bit>
 
 #include "lidarsurf/core/block_mask.hpp"
+#include "lidarsurf/surface/neighbourhood.hpp"
 
 namespace lidarsurf {
 
@@ -33,10 +34,11 @@ NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const Voxel
 }
 
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
-                                    Moments& acc) const {
+                                    Moments& acc, bool caps) const {
     constexpr int B = BlockMap<std::int32_t>::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates, >= 0
-    // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z].
+    // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z]
+    // (every layer without caps).
     const VoxelKey il = l.array() + inset, ih = h.array() - inset;
     const double px = p.x(), py = p.y(), pz = p.z();
     double n = acc.n, s1x = acc.s1.x(), s1y = acc.s1.y(), s1z = acc.s1.z();
@@ -56,7 +58,7 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
                 const int hy0 = std::max(il.y(), y0), hy1 = std::min(ih.y(), y1);
                 if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
                 for (int z = z0; z <= z1; ++z) {
-                    const bool cap = inset == 0 || z == l.z() || z == h.z();
+                    const bool cap = inset == 0 || (caps && (z == l.z() || z == h.z()));
                     std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(z & m)] & (cap ? full : ring);
                     while (bits) {
                         const int bit = std::countr_zero(bits);
@@ -87,6 +89,19 @@ Moments NeighbourhoodWindow::box(const VoxelKey& v, int k) const {
     Moments acc;
     add_shell(v.array() - k, v.array() + (k - 1), 0, v.cast<double>() * alpha_, acc);
     return acc;
+}
+
+Moments NeighbourhoodWindow::slab(const VoxelKey& v, int k) const {
+    Moments acc;
+    const VoxelBox b = slab_box(v, k);
+    add_shell(b.lo, b.hi, 0, v.cast<double>() * alpha_, acc);
+    return acc;
+}
+
+void NeighbourhoodWindow::grow_slab(const VoxelKey& v, int k, Moments& acc) const {
+    // S^k \ S^{k-1}: the x-y ring of width one around [v-k+1, v+k-2]^2, on both layers.
+    const VoxelBox b = slab_box(v, k);
+    add_shell(b.lo, b.hi, 1, v.cast<double>() * alpha_, acc, false);
 }
 
 }  // namespace lidarsurf

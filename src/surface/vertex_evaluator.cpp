@@ -1,5 +1,6 @@
 #include "lidarsurf/surface/vertex_evaluator.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "lidarsurf/surface/gaussian_confidence.hpp"
@@ -48,15 +49,30 @@ namespace {
 
 // The level loop of the modes (Sec. III-C1, Sec. IV-B). `stats_of(level)` gives the merged
 // statistics of H^level(v); the adaptive modes call it with level = 1, 2, ... in order, so it may
-// grow one accumulator shell by shell.
-template <typename StatsOf>
-VertexSample choose_level(StatsOf&& stats_of, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+// grow one accumulator shell by shell. `slab_of(level, first)` gives those of the slab S^level(v)
+// (slab fallback), called with consecutive levels from the first slab level (`first`), so it may
+// grow its own accumulator likewise.
+template <typename StatsOf, typename SlabOf>
+VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vector3d& position, const ReconstructionConfig& config,
                           const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
     if (!config.adaptive())  // CN, CN+GC: only H^k.
         return evaluate_level(stats_of(config.k), config.k, position, config, sensor_local, min_lambda2, solver);
     // AN, AN+GC: the smallest k in [1, k_max] that satisfies the conditions.
+    int slab_start = 0;  // the level at which v switched to slabs (0: not yet)
     for (int level = 1; level <= config.k_max; ++level) {
-        VertexSample s = evaluate_level(stats_of(level), level, position, config, sensor_local, min_lambda2, solver);
+        if (slab_start == 0) {
+            const VoxelStats& cube = stats_of(level);
+            const VertexSample s = evaluate_level(cube, level, position, config, sensor_local, min_lambda2, solver);
+            if (s.defined) return s;
+            // Slab fallback (docs/method.md): from level 2 on, H^k has the points but no plane,
+            // typically because it reaches an object beside the ground; a larger cube reaches more
+            // of the object, so v tries only slabs from here (from slab_from_level: narrower slabs
+            // rarely hold two scan rings).
+            if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min)) continue;
+            slab_start = std::max(level, config.slab_from_level);
+        }
+        if (level < slab_start) continue;
+        const VertexSample s = evaluate_level(slab_of(level, level == slab_start), level, position, config, sensor_local, min_lambda2, solver);
         if (s.defined) return s;
     }
     return {};
@@ -80,7 +96,7 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
 
 VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
                              const Eigen::Vector3d& sensor_local) {
-    VoxelStats acc;
+    VoxelStats acc, slab;
     auto stats_of = [&](int level) -> const VoxelStats& {
         if (config.adaptive())
             grow_neighbourhood(grid, v, level, acc);
@@ -88,27 +104,41 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
             acc = merge_neighbourhood(grid, v, level);
         return acc;
     };
-    return choose_level(stats_of, v.cast<double>() * grid.voxel_size(), config, sensor_local,
+    auto slab_of = [&](int level, bool) -> const VoxelStats& {  // merged whole at every level: the simple way
+        slab = merge_box(grid, slab_box(v, level));
+        return slab;
+    };
+    return choose_level(stats_of, slab_of, v.cast<double>() * grid.voxel_size(), config, sensor_local,
                         degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
 }
 
 VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
                              const Eigen::Vector3d& sensor_local, EigenSolver solver) {
     const Eigen::Vector3d position = v.cast<double>() * window.voxel_size();
-    Moments acc;
+    auto stats = [&](const Moments& m) {
+        if (m.n < config.n_min) {  // Eq. (1) fails: only the count is read
+            VoxelStats few;
+            few.count = static_cast<std::uint64_t>(m.n);
+            return few;
+        }
+        return m.to_stats(position);
+    };
+    Moments acc, slab;
     auto stats_of = [&](int level) {
         if (config.adaptive())
             window.grow(v, level, acc);
         else
             acc = window.box(v, level);
-        if (acc.n < config.n_min) {  // Eq. (1) fails: only the count is read
-            VoxelStats few;
-            few.count = static_cast<std::uint64_t>(acc.n);
-            return few;
-        }
-        return acc.to_stats(position);
+        return stats(acc);
     };
-    return choose_level(stats_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver);
+    auto slab_of = [&](int level, bool first) {
+        if (first)
+            slab = window.slab(v, level);
+        else
+            window.grow_slab(v, level, slab);
+        return stats(slab);
+    };
+    return choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver);
 }
 
 }  // namespace lidarsurf

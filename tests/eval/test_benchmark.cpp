@@ -42,7 +42,7 @@ TEST(Benchmark, TableOneRows) {
 TEST(Benchmark, AblationAddsOneGuardPerRow) {
     const ReconstructionConfig def;
     const auto rows = ablation_methods(def);
-    ASSERT_GE(rows.size(), 6u);
+    ASSERT_GE(rows.size(), 7u);
     const ReconstructionConfig paper = ReconstructionConfig::paper();
     EXPECT_EQ(rows[0].config.min_planarity, paper.min_planarity);
     EXPECT_EQ(rows[0].config.seeded_surface, paper.seeded_surface);
@@ -52,9 +52,12 @@ TEST(Benchmark, AblationAddsOneGuardPerRow) {
     EXPECT_EQ(rows[3].config.max_thickness, def.max_thickness);
     EXPECT_EQ(rows[4].config.truncation_voxels, def.truncation_voxels);
     EXPECT_FALSE(rows[4].config.snap_to_plane);
+    EXPECT_TRUE(rows[5].config.snap_to_plane);
+    EXPECT_EQ(rows[5].config.slab_from_level, 0);
     // The last step of the ablation is the default itself.
-    const ReconstructionConfig& last = rows[5].config;
+    const ReconstructionConfig& last = rows[6].config;
     EXPECT_TRUE(last.snap_to_plane);
+    EXPECT_EQ(last.slab_from_level, def.slab_from_level);
     EXPECT_EQ(last.min_planarity, def.min_planarity);
     EXPECT_EQ(last.max_thickness, def.max_thickness);
     EXPECT_EQ(last.truncation_voxels, def.truncation_voxels);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <random>
 
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 #include "test_util.hpp"
@@ -54,6 +55,40 @@ TEST(Neighbourhood, MergedStatisticsMatchDirectComputation) {
             EXPECT_LT((grown.covariance() - d.cov).cwiseAbs().maxCoeff(), 1e-10);
         }
     }
+}
+
+// The slab S^k(v) (slab fallback): the points whose voxel index is in [v-k, v+k-1] along x and y
+// and in [v_z - 1, v_z] along z, selected one by one, against merge_box(slab_box).
+TEST(Neighbourhood, SlabIsTheCubeCutToTheTwoLayersBesideTheVertex) {
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> u(-1.5, 1.5);
+    const double alpha = 0.2;
+    VoxelGrid grid(alpha, Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d> pts;
+    for (int i = 0; i < 4000; ++i) pts.push_back(Eigen::Vector3d(u(rng), u(rng), 0.5 * u(rng)));
+    for (const auto& p : pts) grid.insert(p);
+    std::uniform_int_distribution<int> c(-6, 6);
+    for (int trial = 0; trial < 30; ++trial) {
+        const VoxelKey v(c(rng), c(rng), c(rng) / 2);
+        for (int k = 1; k <= 5; ++k) {
+            const VoxelBox box = slab_box(v, k);
+            EXPECT_EQ(box.lo, VoxelKey(v.x() - k, v.y() - k, v.z() - 1));
+            EXPECT_EQ(box.hi, VoxelKey(v.x() + k - 1, v.y() + k - 1, v.z()));
+            std::vector<Eigen::Vector3d> members;
+            for (const auto& p : pts) {
+                const int x = static_cast<int>(std::floor(p.x() / alpha)), y = static_cast<int>(std::floor(p.y() / alpha)),
+                          z = static_cast<int>(std::floor(p.z() / alpha));
+                if (x >= v.x() - k && x < v.x() + k && y >= v.y() - k && y < v.y() + k && (z == v.z() - 1 || z == v.z())) members.push_back(p);
+            }
+            const VoxelStats merged = merge_box(grid, box);
+            ASSERT_EQ(merged.count, members.size()) << "k=" << k;
+            if (members.empty()) continue;
+            const auto d = test::direct_stats(members);
+            EXPECT_LT((merged.mean - d.mean).norm(), 1e-9);
+            EXPECT_LT((merged.covariance() - d.cov).cwiseAbs().maxCoeff(), 1e-10);
+        }
+    }
+    EXPECT_THROW(slab_box(VoxelKey::Zero(), 0), InvalidArgument);
 }
 
 TEST(Neighbourhood, LevelOneIsTheEightAdjacentVoxels) {

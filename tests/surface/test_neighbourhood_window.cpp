@@ -1,5 +1,5 @@
 // The fast path's neighbourhood sums and vertex evaluation against the reference ones: the
-// window's raw moments against merge_neighbourhood (itself checked against a direct computation
+// window's raw moments against merge_neighbourhood and merge_box (slabs) (itself checked against a direct computation
 // in test_neighbourhood.cpp), and the windowed evaluate_vertex against the reference
 // evaluate_vertex, for both eigen solvers, far from the world origin and across block borders.
 #include <gtest/gtest.h>
@@ -49,8 +49,9 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
         for (int trial = 0; trial < 200; ++trial) {
             const VoxelKey v(c(rng), c(rng), cz(rng));
             const NeighbourhoodWindow window(packed, vertex_block(v), max_level);
-            Moments grown;
+            Moments grown, slab;
             const Eigen::Vector3d p = v.cast<double>() * alpha;
+            const int first_slab = 1 + trial % 4;  // the slab fallback starts growing at any level
             for (int k = 1; k <= max_level; ++k) {
                 window.grow(v, k, grown);
                 const VoxelStats reference = merge_neighbourhood(grid, v, k);
@@ -58,6 +59,14 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
                                          std::to_string(v.z()) + " k=" + std::to_string(k);
                 expect_same_stats(grown.to_stats(p), reference, alpha, what + " (grown)");
                 expect_same_stats(window.box(v, k).to_stats(p), reference, alpha, what + " (box)");
+                if (k < first_slab) continue;
+                if (k == first_slab)
+                    slab = window.slab(v, k);
+                else
+                    window.grow_slab(v, k, slab);
+                const VoxelStats slab_reference = merge_box(grid, slab_box(v, k));
+                expect_same_stats(slab.to_stats(p), slab_reference, alpha, what + " (slab)");
+                expect_same_stats(window.slab(v, k).to_stats(p), slab_reference, alpha, what + " (whole slab)");
             }
         }
     }

@@ -2,6 +2,8 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/core/packed_voxels.hpp"
+#include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
 #include "test_util.hpp"
 
@@ -122,6 +124,60 @@ TEST(VertexEvaluator, ThicknessGuardRejectsAStepAndKeepsANoisyPlane) {
     EXPECT_FALSE(evaluate_level(step, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
 }
 
+// The slab fallback on a crafted street (alpha = 0.2, local origin 0, sensor at (-3, 0, 1.7)):
+// two scan rings on the ground z = 0.05, lines along y at x = 0.05 and 1.25 (1.2 m apart, as
+// rings some 15 m from an HDL-64), and the side of a raised object (a car body) in the plane
+// x = 0.9, z in [0.45, 1.5]. Vertex v = (3, 0, 1), at (0.6, 0, 0.2), lies 0.15 m above the
+// ground between the rings, under the car's edge. Its cubes: H^1 empty; H^2 a strip of the car
+// only (a line: no plane); H^3..H^5 the car with one or both rings (no plane, or an oblique one across
+// the ground and the car). Its slabs
+// (z in [0, 0.4)) never reach the car: S^3 holds one ring (a line), S^4 both, so with the
+// fallback v is defined at level 4 by the ground's plane: TSDF 0.15 m, normal +z.
+TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
+    VoxelGrid g(0.2, Eigen::Vector3d::Zero());
+    for (int i = 0; i <= 200; ++i)
+        for (double x : {0.05, 1.25}) g.insert({x, -2.0 + 0.02 * i, 0.05});
+    for (int i = 0; i <= 40; ++i)
+        for (int j = 0; j <= 21; ++j) g.insert({0.9, -1.0 + 0.05 * i, 0.45 + 0.05 * j});
+    const VoxelKey v(3, 0, 1);
+    const Eigen::Vector3d sensor(-3.0, 0.0, 1.7);
+    ReconstructionConfig c;  // the default: slab fallback from level 3
+    const VertexSample s = evaluate_vertex(g, v, c, sensor);
+    ASSERT_TRUE(s.defined);
+    EXPECT_EQ(s.level, 4);
+    EXPECT_NEAR(s.tsdf, 0.15, 1e-6);
+    EXPECT_NEAR(s.normal.z(), 1.0f, 1e-5f);
+    // The fast path's windowed evaluation agrees, with either eigen solver.
+    const PackedVoxels packed(g);
+    const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), c.max_level());
+    for (EigenSolver solver : {EigenSolver::Iterative, EigenSolver::ClosedForm}) {
+        const VertexSample fast = evaluate_vertex(window, v, c, sensor, solver);
+        ASSERT_TRUE(fast.defined);
+        EXPECT_EQ(fast.level, 4);
+        EXPECT_NEAR(fast.tsdf, 0.15, 1e-6);
+    }
+    // Without the fallback, H^3 (ring 0 and the car's lowest 0.35 m) passes the guards with a plane
+    // across both: oblique, and on the wrong side of v (true TSDF +0.15 m).
+    c.slab_from_level = 0;
+    for (const VertexSample& o : {evaluate_vertex(g, v, c, sensor), evaluate_vertex(window, v, c, sensor, EigenSolver::ClosedForm)}) {
+        ASSERT_TRUE(o.defined);
+        EXPECT_EQ(o.level, 3);
+        EXPECT_LT(o.normal.z(), std::cos(20.0 * 3.141592653589793 / 180.0));
+        EXPECT_LT(o.tsdf, 0.0f);
+    }
+    // From level 5 on, S^5 (both rings) defines it at level 5; the cubes H^3, H^4 are not tried.
+    c.slab_from_level = 5;
+    const VertexSample late = evaluate_vertex(g, v, c, sensor);
+    ASSERT_TRUE(late.defined);
+    EXPECT_EQ(late.level, 5);
+    EXPECT_NEAR(late.tsdf, 0.15, 1e-6);
+    // The constant modes have one level: no fallback.
+    c = ReconstructionConfig{};
+    c.mode = Mode::ConstantGaussian;
+    c.k = 4;
+    EXPECT_FALSE(evaluate_vertex(g, v, c, sensor).defined);
+}
+
 TEST(Config, PaperTurnsEveryGuardOff) {
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
         const ReconstructionConfig p = ReconstructionConfig::paper(mode);
@@ -129,6 +185,7 @@ TEST(Config, PaperTurnsEveryGuardOff) {
         EXPECT_EQ(p.mode, mode);
         EXPECT_EQ(p.min_planarity, 0);
         EXPECT_EQ(p.max_thickness, 0);
+        EXPECT_EQ(p.slab_from_level, 0);
         EXPECT_EQ(p.truncation_voxels, 0);
         EXPECT_FALSE(p.seeded_surface);
         EXPECT_FALSE(p.snap_to_plane);
@@ -165,6 +222,10 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
     EXPECT_THROW(bad([](auto& c) { c.max_thickness = -0.1; }).validate(), InvalidArgument);
     EXPECT_THROW(bad([](auto& c) { c.max_thickness = std::nan(""); }).validate(), InvalidArgument);
     EXPECT_THROW(bad([](auto& c) { c.min_component_triangles = -1; }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.slab_from_level = 1; }).validate(), InvalidArgument);  // H^1 failing is the single ring
+    EXPECT_THROW(bad([](auto& c) { c.slab_from_level = -1; }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.slab_from_level = 33; }).validate(), InvalidArgument);
+    EXPECT_NO_THROW(bad([](auto& c) { c.slab_from_level = 0; }).validate());
     EXPECT_EQ(parse_mode("AN+GC"), Mode::AdaptiveGaussian);
     EXPECT_EQ(parse_mode("cn"), Mode::Constant);
     EXPECT_THROW(parse_mode("imls"), InvalidArgument);

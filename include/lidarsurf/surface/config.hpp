@@ -1,7 +1,7 @@
 #pragma once
 // The one configuration of the reconstruction. The paper's parameters carry the paper's defaults
 // (Sec. IV-A: alpha = 0.2 m, tau = 0.2, N_min = 10, k_max = 5); the guards we add on top of it
-// (planarity, thickness, truncation, seeded surface, snapping) are on by default and measured in
+// (planarity, thickness, slab fallback, truncation, seeded surface, snapping) are on by default and measured in
 // docs/benchmarks.md; ReconstructionConfig::paper() turns every one of them off. The CLI and the
 // Python bindings fill this same struct, and validate() is the single place parameters are checked.
 #include <limits>
@@ -42,6 +42,13 @@ struct ReconstructionConfig {
     /// voxels) across their plane is not one surface (typically a corner or an object's edge)
     /// and fails like Eq. (1) (docs/method.md). 0 disables.
     double max_thickness = 0.6;
+    /// Slab fallback of the adaptive modes (docs/method.md, "Slab fallback"): a vertex whose cube
+    /// H^k, k >= 2, holds N_min points but defines no plane (typically the ground beside an
+    /// object, which makes H^k too thick) stops trying cubes and tries the horizontal slabs
+    /// S^k = H^k cut to the two voxel layers beside the vertex along z, from level
+    /// max(k, slab_from_level) up to k_max. Assumes z is up (the sensor frame of a KITTI-style
+    /// scan). 0 disables; otherwise in [2, 32].
+    int slab_from_level = 3;
     /// Moves each marching-cubes vertex onto the plane Pi^{k'} of the nearer corner of its edge
     /// (docs/method.md, "Snapping").
     bool snap_to_plane = true;
@@ -66,7 +73,7 @@ struct ReconstructionConfig {
     double max_memory_mb = 4096;
 
     /// The paper's method as written, in `mode`: every guard above off (no planarity or thickness
-    /// guard, no truncation, every cube with defined corners meshed, interpolated vertices).
+    /// guard, no slab fallback, no truncation, every cube with defined corners meshed, interpolated vertices).
     static ReconstructionConfig paper(Mode mode = Mode::AdaptiveGaussian);
     /// Turns this configuration's guards off as paper() does, keeping its other fields.
     void make_paper_literal();

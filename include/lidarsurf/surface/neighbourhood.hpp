@@ -17,6 +17,13 @@ struct VoxelBox {
 /// the inner z range, the two x-slabs of the inner y and z range.
 std::array<VoxelBox, 6> shell_boxes(const VoxelKey& vertex, int k);
 
+/// The slab S^k(v) = [v-k, v+k-1]^2 x [v_z - 1, v_z]: H^k(v) cut to the two voxel layers beside v
+/// along z (the slab fallback, docs/method.md).
+VoxelBox slab_box(const VoxelKey& vertex, int k);
+
+/// Merged statistics of the voxels of `box`.
+VoxelStats merge_box(const VoxelGrid& grid, const VoxelBox& box);
+
 /// Merged statistics |H|, H_mu, H_sigma of H^k(v) (k >= 1).
 VoxelStats merge_neighbourhood(const VoxelGrid& grid, const VoxelKey& vertex, int k);
 

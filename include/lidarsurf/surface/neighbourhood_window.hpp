@@ -39,14 +39,19 @@ public:
     void grow(const VoxelKey& v, int k, Moments& acc) const;
     /// Moments of the whole H^k(v) about v's position.
     Moments box(const VoxelKey& v, int k) const;
+    /// Moments of the whole slab S^k(v) (neighbourhood.hpp's slab_box) about v's position.
+    Moments slab(const VoxelKey& v, int k) const;
+    /// Adds S^k(v) \ S^{k-1}(v) to `acc` (which holds S^{k-1}(v); k >= 2).
+    void grow_slab(const VoxelKey& v, int k, Moments& acc) const;
 
     double voxel_size() const { return alpha_; }
 
 private:
     // Adds the voxels of the box lo <= key <= hi (inclusive) to acc, without its interior box
-    // [lo + inset, hi - inset] when inset > 0 (a shell). One pass over the window blocks, one
-    // 64-bit mask per 8x8 layer.
-    void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc) const;
+    // [lo + inset, hi - inset] when inset > 0 (a shell; with `caps` false the hole runs through
+    // every layer: the x-y ring of a slab). One pass over the window blocks, one 64-bit mask per
+    // 8x8 layer.
+    void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc, bool caps = true) const;
 
     double alpha_;
     int radius_;   // blocks on each side of the vertex block
