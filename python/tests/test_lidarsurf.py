@@ -25,13 +25,14 @@ def test_paper_config_turns_the_guards_off(scan):
     p = lidarsurf.Config.paper("an")
     assert p.mode == "an"
     assert (p.min_planarity, p.max_thickness, p.truncation_voxels) == (0.0, 0.0, 0.0)
+    assert p.slab_from_level == 0
     assert not p.seeded_surface and not p.snap_to_plane
     assert (p.voxel_size, p.tau, p.n_min, p.k_max) == (0.2, 0.2, 10, 5)
     d = lidarsurf.Config()
     assert d.max_thickness > 0 and d.snap_to_plane and d.truncation_voxels > 0
     d.make_paper_literal()
-    assert d.max_thickness == 0 and not d.snap_to_plane
-    assert "max_thickness=0" in repr(d)
+    assert d.max_thickness == 0 and not d.snap_to_plane and d.slab_from_level == 0
+    assert "max_thickness=0" in repr(d) and "slab_from_level=0" in repr(d)
     # Both configurations mesh a part of the scan.
     part = scan[:20000]
     assert len(lidarsurf.reconstruct(part, config=p).triangles) > 0
@@ -47,6 +48,7 @@ def test_paper_config_turns_the_guards_off(scan):
     ("max_memory_mb", 0.0, "max memory"),
     ("max_thickness", -1.0, "max thickness"),
     ("min_component_triangles", -1, "min component"),
+    ("slab_from_level", 1, "slab fallback"),
 ])
 def test_bad_config_raises_value_error(field, value, message, scan):
     c = lidarsurf.Config()

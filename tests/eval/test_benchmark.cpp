@@ -19,12 +19,14 @@ TEST(Benchmark, TableOneRows) {
     // "default" is the configuration given; the Table I rows are the paper as written.
     const ReconstructionConfig def;
     EXPECT_EQ(rows[0].config.max_thickness, def.max_thickness);
+    EXPECT_EQ(rows[0].config.slab_from_level, def.slab_from_level);
     EXPECT_EQ(rows[0].config.snap_to_plane, def.snap_to_plane);
     EXPECT_EQ(rows[0].config.truncation_voxels, def.truncation_voxels);
     for (std::size_t i = 1; i <= 10; ++i) {
         const ReconstructionConfig& c = rows[i].config;
         EXPECT_EQ(c.min_planarity, 0) << rows[i].name;
         EXPECT_EQ(c.max_thickness, 0) << rows[i].name;
+        EXPECT_EQ(c.slab_from_level, 0) << rows[i].name;
         EXPECT_EQ(c.truncation_voxels, 0) << rows[i].name;
         EXPECT_FALSE(c.seeded_surface) << rows[i].name;
         EXPECT_FALSE(c.snap_to_plane) << rows[i].name;
