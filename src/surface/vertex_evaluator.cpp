@@ -67,8 +67,10 @@ VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vec
             // Slab fallback (docs/method.md): from level 2 on, H^k has the points but no plane,
             // typically because it reaches an object beside the ground; a larger cube reaches more
             // of the object, so v tries only slabs from here (from slab_from_level: narrower slabs
-            // rarely hold two scan rings).
-            if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min)) continue;
+            // rarely hold two scan rings), unless no slab level is left to try.
+            if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min) ||
+                std::max(level, config.slab_from_level) > config.k_max)
+                continue;
             slab_start = std::max(level, config.slab_from_level);
         }
         if (level < slab_start) continue;

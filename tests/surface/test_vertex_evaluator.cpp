@@ -171,6 +171,12 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
     ASSERT_TRUE(late.defined);
     EXPECT_EQ(late.level, 5);
     EXPECT_NEAR(late.tsdf, 0.15, 1e-6);
+    // No slab level within k_max: v keeps trying cubes, as without the fallback.
+    c.slab_from_level = 6;
+    const VertexSample none = evaluate_vertex(g, v, c, sensor);
+    ASSERT_TRUE(none.defined);
+    EXPECT_EQ(none.level, 3);
+    EXPECT_LT(none.tsdf, 0.0f);
     // The constant modes have one level: no fallback.
     c = ReconstructionConfig{};
     c.mode = Mode::ConstantGaussian;

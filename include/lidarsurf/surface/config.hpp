@@ -46,8 +46,8 @@ struct ReconstructionConfig {
     /// H^k, k >= 2, holds N_min points but defines no plane (typically the ground beside an
     /// object, which makes H^k too thick) stops trying cubes and tries the horizontal slabs
     /// S^k = H^k cut to the two voxel layers beside the vertex along z, from level
-    /// max(k, slab_from_level) up to k_max. Assumes z is up (the sensor frame of a KITTI-style
-    /// scan). 0 disables; otherwise in [2, 32].
+    /// max(k, slab_from_level) up to k_max (above k_max it keeps trying cubes). Assumes z is up
+    /// (the sensor frame of a KITTI-style scan). 0 disables; otherwise in [2, 32].
     int slab_from_level = 3;
     /// Moves each marching-cubes vertex onto the plane Pi^{k'} of the nearer corner of its edge
     /// (docs/method.md, "Snapping").
