@@ -59,26 +59,6 @@ const std::array<Face, 6>& faces() {
     return f;
 }
 
-// Sorts keys (z, y, x): as 64-bit words whose order is that one (each coordinate biased to be
-// non-negative in 21 bits, z highest), which compare in one instruction.
-void sort_zyx(std::vector<VoxelKey>& keys) {
-    constexpr std::int64_t bias = std::int64_t{1} << 20;  // |coordinate| <= kMaxLatticeIndex < 2^20
-    std::vector<std::uint64_t> packed(keys.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keys.size(), 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i)
-            packed[i] = static_cast<std::uint64_t>(keys[i].z() + bias) << 42 | static_cast<std::uint64_t>(keys[i].y() + bias) << 21 |
-                        static_cast<std::uint64_t>(keys[i].x() + bias);
-    });
-    tbb::parallel_sort(packed.begin(), packed.end());
-    constexpr std::uint64_t mask = (std::uint64_t{1} << 21) - 1;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keys.size(), 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i)
-            keys[i] = VoxelKey(static_cast<int>(static_cast<std::int64_t>(packed[i] & mask) - bias),
-                               static_cast<int>(static_cast<std::int64_t>(packed[i] >> 21 & mask) - bias),
-                               static_cast<int>(static_cast<std::int64_t>(packed[i] >> 42) - bias));
-    });
-}
-
 // The samples of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2), nullptr if undefined).
 using CornerSamples = std::array<const VertexSample*, 8>;
 

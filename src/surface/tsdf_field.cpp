@@ -45,11 +45,7 @@ std::vector<VoxelKey> candidate_vertices(const VoxelGrid& grid, int level) {
         for (int idx = 0; idx < B * B * B; ++idx)
             if (bits.test(static_cast<std::size_t>(idx)))
                 out.emplace_back(block.x() * B + (idx & 7), block.y() * B + ((idx >> 3) & 7), block.z() * B + (idx >> 6));
-    std::sort(out.begin(), out.end(), [](const VoxelKey& a, const VoxelKey& b) {
-        if (a.z() != b.z()) return a.z() < b.z();
-        if (a.y() != b.y()) return a.y() < b.y();
-        return a.x() < b.x();
-    });
+    sort_zyx(out);
     return out;
 }
 

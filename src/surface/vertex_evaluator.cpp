@@ -68,10 +68,10 @@ VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vec
             // typically because it reaches an object beside the ground; a larger cube reaches more
             // of the object, so v tries only slabs from here (from slab_from_level: narrower slabs
             // rarely hold two scan rings), unless no slab level is left to try.
-            if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min) ||
-                std::max(level, config.slab_from_level) > config.k_max)
+            const int first_slab = std::max(level, config.slab_from_level);
+            if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min) || first_slab > config.k_max)
                 continue;
-            slab_start = std::max(level, config.slab_from_level);
+            slab_start = first_slab;
         }
         if (level < slab_start) continue;
         const VertexSample s = evaluate_level(slab_of(level, level == slab_start), level, position, config, sensor_local, min_lambda2, solver);

@@ -2,6 +2,7 @@
 // Integer lattice coordinates shared by voxels and grid vertices, with a hash for sparse maps.
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -35,6 +36,9 @@ struct VoxelKeyHash {
         return static_cast<std::size_t>(mix64(pack_key(k)));
     }
 };
+
+/// Sorts keys by z, then y, then x (in parallel; each key within +-kMaxLatticeIndex).
+void sort_zyx(std::vector<VoxelKey>& keys);
 
 /// Floor division for negative lattice indices (C++ '/' truncates toward zero).
 inline std::int32_t floor_div(std::int32_t a, std::int32_t b) {

@@ -1,0 +1,45 @@
+// sort_zyx against std::sort with the (z, y, x) comparison: keys within the packed range, and keys
+// a few steps beyond +-kMaxLatticeIndex (vertices next to the outermost voxels).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "lidarsurf/core/voxel_key.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+
+bool zyx_less(const VoxelKey& a, const VoxelKey& b) {
+    if (a.z() != b.z()) return a.z() < b.z();
+    if (a.y() != b.y()) return a.y() < b.y();
+    return a.x() < b.x();
+}
+
+std::vector<VoxelKey> random_keys(std::size_t n, int lo, int hi, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<int> c(lo, hi), small(-3, 3);
+    std::vector<VoxelKey> keys;
+    for (std::size_t i = 0; i < n; ++i) keys.emplace_back(c(rng), small(rng), i % 3 ? small(rng) : c(rng));  // many ties in y and z
+    return keys;
+}
+
+}  // namespace
+
+TEST(VoxelKey, SortZyxIsTheLexicographicOrder) {
+    const int reach = kMaxLatticeIndex + 40;  // beyond the 21-bit packing: the comparison fallback
+    for (auto [lo, hi] : {std::pair{-50, 50}, std::pair{-kMaxLatticeIndex, kMaxLatticeIndex}, std::pair{-reach, reach}}) {
+        std::vector<VoxelKey> keys = random_keys(50000, lo, hi, static_cast<unsigned>(hi));
+        keys.push_back(VoxelKey(lo, lo, lo));
+        keys.push_back(VoxelKey(hi, hi, hi));
+        std::vector<VoxelKey> expected = keys;
+        std::sort(expected.begin(), expected.end(), zyx_less);
+        sort_zyx(keys);
+        ASSERT_EQ(keys.size(), expected.size());
+        for (std::size_t i = 0; i < keys.size(); ++i) ASSERT_EQ(keys[i], expected[i]) << "range " << hi << ", position " << i;
+    }
+    std::vector<VoxelKey> none;
+    sort_zyx(none);
+    EXPECT_TRUE(none.empty());
+}
