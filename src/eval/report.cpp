@@ -22,7 +22,10 @@ std::string directed_json(const DirectedError& e) {
 template <typename T, typename F>
 std::string array_json(const std::vector<T>& v, F&& item) {
     std::string s = "[";
-    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + item(v[i]);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        if (i) s += ", ";
+        s += item(v[i]);
+    }
     return s + "]";
 }
 
