@@ -67,6 +67,8 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
              app->add_option("--max-thickness", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"),
              app->add_option("--slab", c.slab_from_level,
                              "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"),
+             app->add_option("--slab-radial", c.slab_radial_extension,
+                             "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"),
              app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"),
              app->add_option("--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"),
              app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"),

@@ -87,7 +87,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     PointCloud cloud;
     cloud.points = points;
-    const double reach = (c.max_level() + 2) * c.voxel_size * 1.7320508075688772;
+    const double reach = (c.max_reach() + 2) * c.voxel_size * 1.7320508075688772;
 
     // The reference path is O(k^3) per candidate vertex: run it on one input in eight.
     for (const Evaluation e : {Evaluation::Fast, Evaluation::Reference}) {

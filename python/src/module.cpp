@@ -146,6 +146,9 @@ PYBIND11_MODULE(_lidarsurf, m) {
         .def_readwrite("slab_from_level", &ReconstructionConfig::slab_from_level,
                        "Slab fallback: a vertex whose cube H^k (k >= 2) has N_min points but no plane tries horizontal slabs "
                        "(H^k cut to the two voxel layers beside it along z) from this level up (0 = off, as the paper).")
+        .def_readwrite("slab_radial_extension", &ReconstructionConfig::slab_radial_extension,
+                       "Radial slabs: the slabs reach this many voxels further on each side along the horizontal axis on "
+                       "which the vertex is further from the sensor, across the scan rings (0 = square slabs).")
         .def_readwrite("snap_to_plane", &ReconstructionConfig::snap_to_plane,
                        "Move each mesh vertex onto the plane of the nearer lattice vertex of its edge (False: interpolate).")
         .def_readwrite("min_component_triangles", &ReconstructionConfig::min_component_triangles,
@@ -163,6 +166,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
             o << "Config(voxel_size=" << c.voxel_size << ", tau=" << c.tau << ", n_min=" << c.n_min << ", k_max=" << c.k_max
               << ", k=" << c.k << ", mode='" << to_string(c.mode) << "', min_planarity=" << c.min_planarity
               << ", max_thickness=" << c.max_thickness << ", slab_from_level=" << c.slab_from_level
+              << ", slab_radial_extension=" << c.slab_radial_extension
               << ", truncation_voxels=" << c.truncation_voxels
               << ", snap_to_plane=" << (c.snap_to_plane ? "True" : "False") << ", min_component_triangles=" << c.min_component_triangles
               << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")

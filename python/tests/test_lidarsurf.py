@@ -30,6 +30,7 @@ def test_paper_config_turns_the_guards_off(scan):
     assert (p.voxel_size, p.tau, p.n_min, p.k_max) == (0.2, 0.2, 10, 5)
     d = lidarsurf.Config()
     assert d.max_thickness > 0 and d.snap_to_plane and d.truncation_voxels > 0
+    assert d.slab_from_level > 0 and d.slab_radial_extension > 0 and "slab_radial_extension=" in repr(d)
     d.make_paper_literal()
     assert d.max_thickness == 0 and not d.snap_to_plane and d.slab_from_level == 0
     assert "max_thickness=0" in repr(d) and "slab_from_level=0" in repr(d)
@@ -49,6 +50,7 @@ def test_paper_config_turns_the_guards_off(scan):
     ("max_thickness", -1.0, "max thickness"),
     ("min_component_triangles", -1, "min component"),
     ("slab_from_level", 1, "slab fallback"),
+    ("slab_radial_extension", -1, "slab radial extension"),
 ])
 def test_bad_config_raises_value_error(field, value, message, scan):
     c = lidarsurf.Config()

@@ -67,7 +67,10 @@ std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base) 
     c.min_component_triangles = base.min_component_triangles;
     rows.push_back(method_row("+snap", c));
     c.slab_from_level = base.slab_from_level;
-    rows.push_back(method_row("+slab (default)", c));
+    c.slab_radial_extension = 0;
+    rows.push_back(method_row("+slab", c));
+    c.slab_radial_extension = base.slab_radial_extension;
+    rows.push_back(method_row("+radial slabs (default)", c));
     for (int k : {3, 7}) {
         ReconstructionConfig ck = base;
         ck.k_max = k;

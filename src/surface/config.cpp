@@ -48,6 +48,10 @@ void ReconstructionConfig::make_paper_literal() {
 
 int ReconstructionConfig::max_level() const { return adaptive() ? k_max : k; }
 
+int ReconstructionConfig::max_reach() const {
+    return max_level() + (adaptive() && slab_from_level > 0 ? slab_radial_extension : 0);
+}
+
 void ReconstructionConfig::validate() const {
     auto fail = [](const std::string& m) { throw InvalidArgument(m); };
     if (!std::isfinite(voxel_size) || voxel_size <= 0) fail("voxel size must be finite and > 0 (got " + std::to_string(voxel_size) + ")");
@@ -63,6 +67,9 @@ void ReconstructionConfig::validate() const {
         fail("max thickness must be within [0, 1e3] voxels (0 disables it; got " + std::to_string(max_thickness) + ")");
     if (slab_from_level != 0 && (slab_from_level < 2 || slab_from_level > kMaxNeighbourhoodLevel))
         fail("slab fallback level must be 0 (off) or in [2, " + std::to_string(kMaxNeighbourhoodLevel) + "] (got " + std::to_string(slab_from_level) + ")");
+    if (slab_radial_extension < 0 || slab_radial_extension > kMaxNeighbourhoodLevel)
+        fail("slab radial extension must be in [0, " + std::to_string(kMaxNeighbourhoodLevel) + "] voxels (got " +
+             std::to_string(slab_radial_extension) + ")");
     if (min_component_triangles < 0) fail("min component triangles must be >= 0 (got " + std::to_string(min_component_triangles) + ")");
     if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
         fail("truncation must be finite and >= 0 voxels (0 disables it; got " + std::to_string(truncation_voxels) + ")");

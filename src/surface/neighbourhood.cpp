@@ -1,5 +1,7 @@
 #include "lidarsurf/surface/neighbourhood.hpp"
 
+#include <cmath>
+
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
@@ -15,9 +17,16 @@ VoxelStats merge_neighbourhood(const VoxelGrid& grid, const VoxelKey& v, int k) 
     return merge_box(grid, {v.array() - k, v.array() + (k - 1)});  // [v-k, v+k-1]^3
 }
 
-VoxelBox slab_box(const VoxelKey& v, int k) {
+SlabExtension radial_extension(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor, int voxels) {
+    const Eigen::Vector3d r = position - sensor;
+    if (std::abs(r.x()) >= std::abs(r.y())) return {voxels, 0};
+    return {0, voxels};
+}
+
+VoxelBox slab_box(const VoxelKey& v, int k, SlabExtension e) {
     if (k < 1) throw InvalidArgument("neighbourhood level must be >= 1");
-    return {{v.x() - k, v.y() - k, v.z() - 1}, {v.x() + k - 1, v.y() + k - 1, v.z()}};
+    if (e.x < 0 || e.y < 0) throw InvalidArgument("slab extension must be >= 0");
+    return {{v.x() - k - e.x, v.y() - k - e.y, v.z() - 1}, {v.x() + k - 1 + e.x, v.y() + k - 1 + e.y, v.z()}};
 }
 
 std::array<VoxelBox, 6> shell_boxes(const VoxelKey& v, int k) {

@@ -91,16 +91,16 @@ Moments NeighbourhoodWindow::box(const VoxelKey& v, int k) const {
     return acc;
 }
 
-Moments NeighbourhoodWindow::slab(const VoxelKey& v, int k) const {
+Moments NeighbourhoodWindow::slab(const VoxelKey& v, int k, SlabExtension e) const {
     Moments acc;
-    const VoxelBox b = slab_box(v, k);
+    const VoxelBox b = slab_box(v, k, e);
     add_shell(b.lo, b.hi, 0, v.cast<double>() * alpha_, acc);
     return acc;
 }
 
-void NeighbourhoodWindow::grow_slab(const VoxelKey& v, int k, Moments& acc) const {
-    // S^k \ S^{k-1}: the x-y ring of width one around [v-k+1, v+k-2]^2, on both layers.
-    const VoxelBox b = slab_box(v, k);
+void NeighbourhoodWindow::grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e) const {
+    // S^k \ S^{k-1}: the x-y ring of width one around S^{k-1}'s x-y range, on both layers.
+    const VoxelBox b = slab_box(v, k, e);
     add_shell(b.lo, b.hi, 1, v.cast<double>() * alpha_, acc, false);
 }
 

@@ -270,7 +270,7 @@ private:
         for (int w = 0; w < kWindows; ++w)
             if (windows_[w] && window_block_[w] == block) return *windows_[w];
         const int w = next_window_++ % kWindows;
-        windows_[w].emplace(s_.packed, block, s_.config.max_level());
+        windows_[w].emplace(s_.packed, block, s_.config.max_reach());
         window_block_[w] = block;
         return *windows_[w];
     }

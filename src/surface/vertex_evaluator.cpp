@@ -106,11 +106,13 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
             acc = merge_neighbourhood(grid, v, level);
         return acc;
     };
+    const Eigen::Vector3d position = v.cast<double>() * grid.voxel_size();
+    const SlabExtension e = radial_extension(position, sensor_local, config.slab_radial_extension);
     auto slab_of = [&](int level, bool) -> const VoxelStats& {  // merged whole at every level: the simple way
-        slab = merge_box(grid, slab_box(v, level));
+        slab = merge_box(grid, slab_box(v, level, e));
         return slab;
     };
-    return choose_level(stats_of, slab_of, v.cast<double>() * grid.voxel_size(), config, sensor_local,
+    return choose_level(stats_of, slab_of, position, config, sensor_local,
                         degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
 }
 
@@ -126,6 +128,7 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
         return m.to_stats(position);
     };
     Moments acc, slab;
+    const SlabExtension e = radial_extension(position, sensor_local, config.slab_radial_extension);
     auto stats_of = [&](int level) {
         if (config.adaptive())
             window.grow(v, level, acc);
@@ -135,9 +138,9 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
     };
     auto slab_of = [&](int level, bool first) {
         if (first)
-            slab = window.slab(v, level);
+            slab = window.slab(v, level, e);
         else
-            window.grow_slab(v, level, slab);
+            window.grow_slab(v, level, slab, e);
         return stats(slab);
     };
     return choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver);

@@ -44,7 +44,7 @@ TEST(Benchmark, TableOneRows) {
 TEST(Benchmark, AblationAddsOneGuardPerRow) {
     const ReconstructionConfig def;
     const auto rows = ablation_methods(def);
-    ASSERT_GE(rows.size(), 7u);
+    ASSERT_GE(rows.size(), 8u);
     const ReconstructionConfig paper = ReconstructionConfig::paper();
     EXPECT_EQ(rows[0].config.min_planarity, paper.min_planarity);
     EXPECT_EQ(rows[0].config.seeded_surface, paper.seeded_surface);
@@ -56,8 +56,11 @@ TEST(Benchmark, AblationAddsOneGuardPerRow) {
     EXPECT_FALSE(rows[4].config.snap_to_plane);
     EXPECT_TRUE(rows[5].config.snap_to_plane);
     EXPECT_EQ(rows[5].config.slab_from_level, 0);
+    EXPECT_EQ(rows[6].config.slab_from_level, def.slab_from_level);
+    EXPECT_EQ(rows[6].config.slab_radial_extension, 0);
     // The last step of the ablation is the default itself.
-    const ReconstructionConfig& last = rows[6].config;
+    const ReconstructionConfig& last = rows[7].config;
+    EXPECT_EQ(last.slab_radial_extension, def.slab_radial_extension);
     EXPECT_TRUE(last.snap_to_plane);
     EXPECT_EQ(last.slab_from_level, def.slab_from_level);
     EXPECT_EQ(last.min_planarity, def.min_planarity);

@@ -91,6 +91,27 @@ TEST(Neighbourhood, SlabIsTheCubeCutToTheTwoLayersBesideTheVertex) {
     EXPECT_THROW(slab_box(VoxelKey::Zero(), 0), InvalidArgument);
 }
 
+TEST(Neighbourhood, RadialSlabExtendsAlongTheAxisAwayFromTheSensor) {
+    const VoxelKey v(4, -2, 1);
+    const VoxelBox square = slab_box(v, 3), along_x = slab_box(v, 3, {2, 0}), along_y = slab_box(v, 3, {0, 2});
+    EXPECT_EQ(along_x.lo, VoxelKey(square.lo.x() - 2, square.lo.y(), square.lo.z()));
+    EXPECT_EQ(along_x.hi, VoxelKey(square.hi.x() + 2, square.hi.y(), square.hi.z()));
+    EXPECT_EQ(along_y.lo, VoxelKey(square.lo.x(), square.lo.y() - 2, square.lo.z()));
+    EXPECT_EQ(along_y.hi, VoxelKey(square.hi.x(), square.hi.y() + 2, square.hi.z()));
+    EXPECT_THROW(slab_box(v, 3, {-1, 0}), InvalidArgument);
+    // The axis on which the vertex is further from the sensor; x on a tie; z plays no part.
+    const Eigen::Vector3d sensor(1.0, 2.0, 1.7);
+    auto ext = [&](double x, double y, double z) { return radial_extension(Eigen::Vector3d(x, y, z), sensor, 3); };
+    EXPECT_EQ(ext(11.0, 3.0, 0.0).x, 3);
+    EXPECT_EQ(ext(11.0, 3.0, 0.0).y, 0);
+    EXPECT_EQ(ext(-9.0, 5.0, -1.7).x, 3);
+    EXPECT_EQ(ext(2.0, -18.0, 0.0).y, 3);
+    EXPECT_EQ(ext(2.0, -18.0, 0.0).x, 0);
+    EXPECT_EQ(ext(4.0, 5.0, 30.0).x, 3);  // |dx| = |dy| = 3
+    EXPECT_EQ(ext(4.0, 5.0, 30.0).y, 0);
+    EXPECT_EQ(radial_extension(Eigen::Vector3d(9, 0, 0), sensor, 0).x, 0);
+}
+
 TEST(Neighbourhood, LevelOneIsTheEightAdjacentVoxels) {
     VoxelGrid g(1.0);
     // Put one point at the centre of every voxel of a 4x4x4 block around vertex (0,0,0).

@@ -52,6 +52,7 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
             Moments grown, slab;
             const Eigen::Vector3d p = v.cast<double>() * alpha;
             const int first_slab = 1 + trial % 4;  // the slab fallback starts growing at any level
+            const SlabExtension e{(trial / 4) % 3, (trial / 12) % 2 * 3};  // radial slabs, along x, y, both or neither
             for (int k = 1; k <= max_level; ++k) {
                 window.grow(v, k, grown);
                 const VoxelStats reference = merge_neighbourhood(grid, v, k);
@@ -59,14 +60,14 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
                                          std::to_string(v.z()) + " k=" + std::to_string(k);
                 expect_same_stats(grown.to_stats(p), reference, alpha, what + " (grown)");
                 expect_same_stats(window.box(v, k).to_stats(p), reference, alpha, what + " (box)");
-                if (k < first_slab) continue;
+                if (k < first_slab || k + std::max(e.x, e.y) > max_level) continue;
                 if (k == first_slab)
-                    slab = window.slab(v, k);
+                    slab = window.slab(v, k, e);
                 else
-                    window.grow_slab(v, k, slab);
-                const VoxelStats slab_reference = merge_box(grid, slab_box(v, k));
+                    window.grow_slab(v, k, slab, e);
+                const VoxelStats slab_reference = merge_box(grid, slab_box(v, k, e));
                 expect_same_stats(slab.to_stats(p), slab_reference, alpha, what + " (slab)");
-                expect_same_stats(window.slab(v, k).to_stats(p), slab_reference, alpha, what + " (whole slab)");
+                expect_same_stats(window.slab(v, k, e).to_stats(p), slab_reference, alpha, what + " (whole slab)");
             }
         }
     }
@@ -87,7 +88,7 @@ TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
                 for (int y = -14; y <= 14; y += 2)
                     for (int x = -14; x <= 14; ++x) {
                         const VoxelKey v(x, y, z);
-                        const NeighbourhoodWindow window(packed, vertex_block(v), config.max_level());
+                        const NeighbourhoodWindow window(packed, vertex_block(v), config.max_reach());
                         const VertexSample fast = evaluate_vertex(window, v, config, sensor, solver);
                         const VertexSample ref = evaluate_vertex(grid, v, config, sensor);
                         ++compared;

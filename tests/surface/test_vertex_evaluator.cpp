@@ -141,7 +141,8 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
         for (int j = 0; j <= 21; ++j) g.insert({0.9, -1.0 + 0.05 * i, 0.45 + 0.05 * j});
     const VoxelKey v(3, 0, 1);
     const Eigen::Vector3d sensor(-3.0, 0.0, 1.7);
-    ReconstructionConfig c;  // the default: slab fallback from level 3
+    ReconstructionConfig c;  // the default: slab fallback from level 3, here with square slabs
+    c.slab_radial_extension = 0;
     const VertexSample s = evaluate_vertex(g, v, c, sensor);
     ASSERT_TRUE(s.defined);
     EXPECT_EQ(s.level, 4);
@@ -149,7 +150,7 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
     EXPECT_NEAR(s.normal.z(), 1.0f, 1e-5f);
     // The fast path's windowed evaluation agrees, with either eigen solver.
     const PackedVoxels packed(g);
-    const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), c.max_level());
+    const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), c.max_reach());
     for (EigenSolver solver : {EigenSolver::Iterative, EigenSolver::ClosedForm}) {
         const VertexSample fast = evaluate_vertex(window, v, c, sensor, solver);
         ASSERT_TRUE(fast.defined);
@@ -182,6 +183,42 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
     c.mode = Mode::ConstantGaussian;
     c.k = 4;
     EXPECT_FALSE(evaluate_vertex(g, v, c, sensor).defined);
+}
+
+// Radial slabs on the same street. The sensor at (-3, 0, 1.7) sees v along x, across the rings:
+// with the default extension (3 voxels), S^3 spans x in [-0.6, 1.8) and holds both rings, so v is
+// defined one level earlier than with square slabs. Seen along y instead (sensor at
+// (0.6, -5, 1.7)), the slabs extend along the rings, S^3 holds one ring (a line) and v is defined
+// at level 4 as with square slabs. Both paths agree.
+TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {
+    VoxelGrid g(0.2, Eigen::Vector3d::Zero());
+    for (int i = 0; i <= 200; ++i)
+        for (double x : {0.05, 1.25}) g.insert({x, -2.0 + 0.02 * i, 0.05});
+    for (int i = 0; i <= 40; ++i)
+        for (int j = 0; j <= 21; ++j) g.insert({0.9, -1.0 + 0.05 * i, 0.45 + 0.05 * j});
+    const VoxelKey v(3, 0, 1);
+    const Eigen::Vector3d position(0.6, 0.0, 0.2);
+    ReconstructionConfig c;
+    ASSERT_EQ(c.slab_radial_extension, 3);
+    const PackedVoxels packed(g);
+    const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), c.max_reach());
+    ASSERT_EQ(c.max_reach(), c.k_max + 3);
+    struct Case {
+        Eigen::Vector3d sensor;
+        int level;
+    };
+    for (const Case& k : {Case{{-3.0, 0.0, 1.7}, 3}, Case{{0.6, -5.0, 1.7}, 4}}) {
+        const SlabExtension e = radial_extension(position, k.sensor, c.slab_radial_extension);
+        EXPECT_EQ(e.x, k.level == 3 ? 3 : 0);
+        EXPECT_EQ(e.y, k.level == 3 ? 0 : 3);
+        for (const VertexSample& s : {evaluate_vertex(g, v, c, k.sensor), evaluate_vertex(window, v, c, k.sensor, EigenSolver::Iterative),
+                                      evaluate_vertex(window, v, c, k.sensor, EigenSolver::ClosedForm)}) {
+            ASSERT_TRUE(s.defined) << k.sensor.transpose();
+            EXPECT_EQ(s.level, k.level) << k.sensor.transpose();
+            EXPECT_NEAR(s.tsdf, 0.15, 1e-6);
+            EXPECT_NEAR(s.normal.z(), 1.0f, 1e-5f);
+        }
+    }
 }
 
 TEST(Config, PaperTurnsEveryGuardOff) {
@@ -232,6 +269,18 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
     EXPECT_THROW(bad([](auto& c) { c.slab_from_level = -1; }).validate(), InvalidArgument);
     EXPECT_THROW(bad([](auto& c) { c.slab_from_level = 33; }).validate(), InvalidArgument);
     EXPECT_NO_THROW(bad([](auto& c) { c.slab_from_level = 0; }).validate());
+    EXPECT_THROW(bad([](auto& c) { c.slab_radial_extension = -1; }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.slab_radial_extension = 33; }).validate(), InvalidArgument);
+    EXPECT_NO_THROW(bad([](auto& c) { c.slab_radial_extension = 0; }).validate());
+    // The neighbourhoods' reach: the slabs' extension counts only where slabs are tried.
+    ReconstructionConfig r;
+    EXPECT_EQ(r.max_reach(), r.k_max + r.slab_radial_extension);
+    r.slab_from_level = 0;
+    EXPECT_EQ(r.max_reach(), r.k_max);
+    r = ReconstructionConfig{};
+    r.mode = Mode::ConstantGaussian;
+    EXPECT_EQ(r.max_reach(), r.k);
+    EXPECT_EQ(ReconstructionConfig::paper().max_reach(), ReconstructionConfig::paper().k_max);
     EXPECT_EQ(parse_mode("AN+GC"), Mode::AdaptiveGaussian);
     EXPECT_EQ(parse_mode("cn"), Mode::Constant);
     EXPECT_THROW(parse_mode("imls"), InvalidArgument);

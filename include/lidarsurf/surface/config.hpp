@@ -49,6 +49,11 @@ struct ReconstructionConfig {
     /// max(k, slab_from_level) up to k_max (above k_max it keeps trying cubes). Assumes z is up
     /// (the sensor frame of a KITTI-style scan). 0 disables; otherwise in [2, 32].
     int slab_from_level = 3;
+    /// Radial reach of those slabs, in voxels: S^k extends this much further on each side along
+    /// the horizontal axis nearer the direction from the sensor (across the scan rings, whose
+    /// spacing on the ground grows with the square of the range), so it can hold two rings where
+    /// a square one holds one (docs/method.md, "Radial slabs"). In [0, 32]; 0 = square slabs.
+    int slab_radial_extension = 3;
     /// Moves each marching-cubes vertex onto the plane Pi^{k'} of the nearer corner of its edge
     /// (docs/method.md, "Snapping").
     bool snap_to_plane = true;
@@ -83,6 +88,9 @@ struct ReconstructionConfig {
 
     /// Largest level this configuration evaluates (k_max or k).
     int max_level() const;
+    /// How far (in voxels, per axis) from a vertex its neighbourhoods reach: max_level(), plus
+    /// the slabs' radial extension when the slab fallback is on.
+    int max_reach() const;
     bool adaptive() const { return mode == Mode::AdaptiveGaussian || mode == Mode::Adaptive; }
     bool gaussian() const { return mode == Mode::AdaptiveGaussian || mode == Mode::ConstantGaussian; }
 

@@ -17,9 +17,19 @@ struct VoxelBox {
 /// the inner z range, the two x-slabs of the inner y and z range.
 std::array<VoxelBox, 6> shell_boxes(const VoxelKey& vertex, int k);
 
-/// The slab S^k(v) = [v-k, v+k-1]^2 x [v_z - 1, v_z]: H^k(v) cut to the two voxel layers beside v
-/// along z (the slab fallback, docs/method.md).
-VoxelBox slab_box(const VoxelKey& vertex, int k);
+/// How far a slab reaches beyond [v-k, v+k-1] on each side, per horizontal axis (x, y).
+struct SlabExtension {
+    int x = 0, y = 0;
+};
+
+/// The radial slab extension of a vertex at `position` seen from `sensor` (same frame): `voxels`
+/// along the horizontal axis on which the vertex is further from the sensor (x on a tie), 0 along
+/// the other (docs/method.md, "Radial slabs").
+SlabExtension radial_extension(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor, int voxels);
+
+/// The slab S^k(v) = [v-k-e_x, v+k-1+e_x] x [v-k-e_y, v+k-1+e_y] x [v_z - 1, v_z]: H^k(v) cut to
+/// the two voxel layers beside v along z and extended by e (the slab fallback, docs/method.md).
+VoxelBox slab_box(const VoxelKey& vertex, int k, SlabExtension e = {});
 
 /// Merged statistics of the voxels of `box`.
 VoxelStats merge_box(const VoxelGrid& grid, const VoxelBox& box);

@@ -15,6 +15,7 @@
 
 #include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
+#include "lidarsurf/surface/neighbourhood.hpp"
 
 namespace lidarsurf {
 
@@ -39,10 +40,11 @@ public:
     void grow(const VoxelKey& v, int k, Moments& acc) const;
     /// Moments of the whole H^k(v) about v's position.
     Moments box(const VoxelKey& v, int k) const;
-    /// Moments of the whole slab S^k(v) (neighbourhood.hpp's slab_box) about v's position.
-    Moments slab(const VoxelKey& v, int k) const;
-    /// Adds S^k(v) \ S^{k-1}(v) to `acc` (which holds S^{k-1}(v); k >= 2).
-    void grow_slab(const VoxelKey& v, int k, Moments& acc) const;
+    /// Moments of the whole slab S^k(v) extended by e (neighbourhood.hpp's slab_box) about v's
+    /// position; k + max(e) must be <= max_level.
+    Moments slab(const VoxelKey& v, int k, SlabExtension e = {}) const;
+    /// Adds S^k(v) \ S^{k-1}(v) (both extended by e) to `acc` (which holds S^{k-1}(v); k >= 2).
+    void grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e = {}) const;
 
     double voxel_size() const { return alpha_; }
 
