@@ -4,6 +4,7 @@
 #include <bit>
 
 #include "lidarsurf/core/block_mask.hpp"
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 
 namespace lidarsurf {
@@ -36,7 +37,9 @@ NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const Voxel
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
                                     Moments& acc, bool caps) const {
     constexpr int B = BlockMap<std::int32_t>::kSize, m = B - 1;
-    const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates, >= 0
+    const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
+    if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
+        throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");
     // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z]
     // (every layer without caps).
     const VoxelKey il = l.array() + inset, ih = h.array() - inset;

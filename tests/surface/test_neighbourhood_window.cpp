@@ -6,6 +6,7 @@
 
 #include <random>
 
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
@@ -71,6 +72,25 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
             }
         }
     }
+}
+
+TEST(NeighbourhoodWindow, RefusesABoxBeyondItsBlocks) {
+    const VoxelGrid grid = wavy_grid(0.2);
+    const PackedVoxels packed(grid);
+    // Max level 5: one block on each side of vertex block 0, i.e. voxels [-8, 15] per axis.
+    const NeighbourhoodWindow window(packed, VoxelKey::Zero(), 5);
+    const VoxelKey first(0, 0, 0), last(7, 7, 7);  // the block's first and last vertex
+    EXPECT_NO_THROW(window.box(first, 8));         // [-8, 7]
+    EXPECT_THROW(window.box(first, 9), InvalidArgument);
+    EXPECT_NO_THROW(window.slab(first, 5, {3, 0}));  // x in [-8, 7]
+    EXPECT_THROW(window.slab(first, 5, {4, 0}), InvalidArgument);
+    EXPECT_THROW(window.slab(first, 5, {0, 4}), InvalidArgument);
+    EXPECT_NO_THROW(window.box(last, 9));  // [-2, 15]
+    EXPECT_THROW(window.box(last, 10), InvalidArgument);
+    EXPECT_NO_THROW(window.slab(last, 5, {4, 0}));  // x in [-2, 15]
+    EXPECT_THROW(window.slab(last, 5, {5, 0}), InvalidArgument);
+    Moments acc = window.slab(last, 2, {0, 6});
+    EXPECT_THROW(window.grow_slab(last, 4, acc, {0, 6}), InvalidArgument);  // y up to 7 + 3 + 6 = 16
 }
 
 TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {

@@ -41,7 +41,8 @@ public:
     /// Moments of the whole H^k(v) about v's position.
     Moments box(const VoxelKey& v, int k) const;
     /// Moments of the whole slab S^k(v) extended by e (neighbourhood.hpp's slab_box) about v's
-    /// position; k + max(e) must be <= max_level.
+    /// position; k + max(e) must be <= max_level. Every method throws InvalidArgument for a box
+    /// beyond the window's blocks.
     Moments slab(const VoxelKey& v, int k, SlabExtension e = {}) const;
     /// Adds S^k(v) \ S^{k-1}(v) (both extended by e) to `acc` (which holds S^{k-1}(v); k >= 2).
     void grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e = {}) const;
