@@ -124,6 +124,17 @@ TEST(VertexEvaluator, ThicknessGuardRejectsAStepAndKeepsANoisyPlane) {
     EXPECT_FALSE(evaluate_level(step, 2, v, c, sensor, degenerate_lambda2(0.2), EigenSolver::Iterative).defined);
 }
 
+// A crafted street (alpha = 0.2, local origin 0): two scan rings on the ground z = 0.05, lines
+// along y at x = 0.05 and 1.25, and the side of a car body in the plane x = 0.9, z in [0.45, 1.5].
+VoxelGrid crafted_street() {
+    VoxelGrid g(0.2, Eigen::Vector3d::Zero());
+    for (int i = 0; i <= 200; ++i)
+        for (double x : {0.05, 1.25}) g.insert({x, -2.0 + 0.02 * i, 0.05});
+    for (int i = 0; i <= 40; ++i)
+        for (int j = 0; j <= 21; ++j) g.insert({0.9, -1.0 + 0.05 * i, 0.45 + 0.05 * j});
+    return g;
+}
+
 // The slab fallback on a crafted street (alpha = 0.2, local origin 0, sensor at (-3, 0, 1.7)):
 // two scan rings on the ground z = 0.05, lines along y at x = 0.05 and 1.25 (1.2 m apart, as
 // rings some 15 m from an HDL-64), and the side of a raised object (a car body) in the plane
@@ -134,11 +145,7 @@ TEST(VertexEvaluator, ThicknessGuardRejectsAStepAndKeepsANoisyPlane) {
 // (z in [0, 0.4)) never reach the car: S^3 holds one ring (a line), S^4 both, so with the
 // fallback v is defined at level 4 by the ground's plane: TSDF 0.15 m, normal +z.
 TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
-    VoxelGrid g(0.2, Eigen::Vector3d::Zero());
-    for (int i = 0; i <= 200; ++i)
-        for (double x : {0.05, 1.25}) g.insert({x, -2.0 + 0.02 * i, 0.05});
-    for (int i = 0; i <= 40; ++i)
-        for (int j = 0; j <= 21; ++j) g.insert({0.9, -1.0 + 0.05 * i, 0.45 + 0.05 * j});
+    const VoxelGrid g = crafted_street();
     const VoxelKey v(3, 0, 1);
     const Eigen::Vector3d sensor(-3.0, 0.0, 1.7);
     ReconstructionConfig c;  // the default: slab fallback from level 3, here with square slabs
@@ -191,11 +198,7 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
 // (0.6, -5, 1.7)), the slabs extend along the rings, S^3 holds one ring (a line) and v is defined
 // at level 4 as with square slabs. Both paths agree.
 TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {
-    VoxelGrid g(0.2, Eigen::Vector3d::Zero());
-    for (int i = 0; i <= 200; ++i)
-        for (double x : {0.05, 1.25}) g.insert({x, -2.0 + 0.02 * i, 0.05});
-    for (int i = 0; i <= 40; ++i)
-        for (int j = 0; j <= 21; ++j) g.insert({0.9, -1.0 + 0.05 * i, 0.45 + 0.05 * j});
+    const VoxelGrid g = crafted_street();
     const VoxelKey v(3, 0, 1);
     const Eigen::Vector3d position(0.6, 0.0, 0.2);
     ReconstructionConfig c;
