@@ -49,9 +49,9 @@ namespace {
 
 // The level loop of the modes (Sec. III-C1, Sec. IV-B). `stats_of(level)` gives the merged
 // statistics of H^level(v); the adaptive modes call it with level = 1, 2, ... in order, so it may
-// grow one accumulator shell by shell. `slab_of(level, first)` gives those of the slab S^level(v)
-// (slab fallback), called with consecutive levels from the first slab level (`first`), so it may
-// grow its own accumulator likewise.
+// grow one accumulator shell by shell. `slab_of(level, first, e)` gives those of the slab
+// S^level(v) extended by e (slab fallback, radial slabs), called with consecutive levels from the
+// first slab level (`first`) and the same e, so it may grow its own accumulator likewise.
 template <typename StatsOf, typename SlabOf>
 VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vector3d& position, const ReconstructionConfig& config,
                           const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
@@ -59,6 +59,7 @@ VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vec
         return evaluate_level(stats_of(config.k), config.k, position, config, sensor_local, min_lambda2, solver);
     // AN, AN+GC: the smallest k in [1, k_max] that satisfies the conditions.
     int slab_start = 0;  // the level at which v switched to slabs (0: not yet)
+    SlabExtension extension;  // the slabs' radial extension, set at the switch
     for (int level = 1; level <= config.k_max; ++level) {
         if (slab_start == 0) {
             const VoxelStats& cube = stats_of(level);
@@ -72,9 +73,10 @@ VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vec
             if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min) || first_slab > config.k_max)
                 continue;
             slab_start = first_slab;
+            extension = radial_extension(position, sensor_local, config.slab_radial_extension);
         }
         if (level < slab_start) continue;
-        const VertexSample s = evaluate_level(slab_of(level, level == slab_start), level, position, config, sensor_local, min_lambda2, solver);
+        const VertexSample s = evaluate_level(slab_of(level, level == slab_start, extension), level, position, config, sensor_local, min_lambda2, solver);
         if (s.defined) return s;
     }
     return {};
@@ -106,13 +108,11 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
             acc = merge_neighbourhood(grid, v, level);
         return acc;
     };
-    const Eigen::Vector3d position = v.cast<double>() * grid.voxel_size();
-    const SlabExtension e = radial_extension(position, sensor_local, config.slab_radial_extension);
-    auto slab_of = [&](int level, bool) -> const VoxelStats& {  // merged whole at every level: the simple way
+    auto slab_of = [&](int level, bool, SlabExtension e) -> const VoxelStats& {  // merged whole at every level: the simple way
         slab = merge_box(grid, slab_box(v, level, e));
         return slab;
     };
-    return choose_level(stats_of, slab_of, position, config, sensor_local,
+    return choose_level(stats_of, slab_of, v.cast<double>() * grid.voxel_size(), config, sensor_local,
                         degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
 }
 
@@ -128,7 +128,6 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
         return m.to_stats(position);
     };
     Moments acc, slab;
-    const SlabExtension e = radial_extension(position, sensor_local, config.slab_radial_extension);
     auto stats_of = [&](int level) {
         if (config.adaptive())
             window.grow(v, level, acc);
@@ -136,7 +135,7 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
             acc = window.box(v, level);
         return stats(acc);
     };
-    auto slab_of = [&](int level, bool first) {
+    auto slab_of = [&](int level, bool first, SlabExtension e) {
         if (first)
             slab = window.slab(v, level, e);
         else
