@@ -8,7 +8,8 @@
 
 namespace lidarsurf {
 
-/// N_PDF(w | H_mu, Sigma) with w = projection of v onto the plane. Units: 1/m^2.
+/// N_PDF(w | H_mu, Sigma) with w = projection of v onto the plane. Units: 1/m^2. Computed from the
+/// plane's covariance and eigenvalues, without its in-plane axes (an identity; see the .cpp).
 double gaussian_confidence(const LocalPlane& plane, const Eigen::Vector3d& v);
 
 }  // namespace lidarsurf

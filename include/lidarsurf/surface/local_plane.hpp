@@ -12,13 +12,16 @@ namespace lidarsurf {
 struct LocalPlane {
     Eigen::Vector3d mean;     ///< H_mu, a point of the plane Pi.
     Eigen::Vector3d normal;   ///< n, unit, oriented toward the sensor (Eq. 2).
-    Eigen::Vector3d e1, e2;   ///< in-plane principal axes (unit).
     double lambda1 = 0, lambda2 = 0, lambda3 = 0;  ///< eigenvalues, lambda1 >= lambda2 >= lambda3.
+    /// H_sigma, whose in-plane principal axes e1, e2 (eigenvectors of lambda1, lambda2) Eq. (3)
+    /// uses through the quadratic form (gaussian_confidence.hpp), so they are not stored.
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
 };
 
-/// How the 3x3 covariance is diagonalised: Eigen's iterative QL (the reference) or its
-/// closed-form trigonometric solver (SelfAdjointEigenSolver::computeDirect; several times faster,
-/// eigenvectors accurate to ~1e-10 rad unless two eigenvalues nearly coincide).
+/// How the 3x3 covariance is diagonalised: Eigen's iterative QL (the reference), or the fast path's
+/// closed form: plane_eigen (symmetric_eigen.hpp: Newton for lambda3, the normal as a kernel), and
+/// Eigen's trigonometric computeDirect where that refuses (lambda2 ~ lambda3). Normals accurate to
+/// ~1e-10 rad unless two eigenvalues nearly coincide.
 enum class EigenSolver { Iterative, ClosedForm };
 
 /// Fits the plane of `stats` if |H| >= n_min (Eq. 1). Returns nullopt when Eq. (1) fails or the

@@ -1,0 +1,28 @@
+#pragma once
+// What a plane fit needs of a 3x3 covariance, without trigonometry (issue 5): its eigenvalues
+// and the eigenvector of the smallest, the normal. Shifted by the mean eigenvalue T/3 (as Eigen's
+// computeDirect), lambda3 - T/3 is the smallest root of the trace-free matrix's characteristic
+// polynomial, found by Newton's method from -T/3, where the polynomial is increasing and concave,
+// so the iterates rise monotonically to it; for a planar neighbourhood (lambda3 << lambda2) the
+// start is already within lambda3 of it. lambda1 and lambda2 are the roots of the remaining
+// quadratic, e3 the kernel of C - lambda3 I (the cross product of its two most independent rows).
+// Eigen's computeDirect spends most of its time in atan2 and sincos for the same values, and on
+// two more eigenvectors a plane does not need.
+#include <optional>
+
+#include <Eigen/Core>
+
+namespace lidarsurf {
+
+struct PlaneEigen {
+    double lambda1 = 0, lambda2 = 0, lambda3 = 0;  ///< lambda1 >= lambda2 >= lambda3
+    Eigen::Vector3d e3 = Eigen::Vector3d::Zero();  ///< unit eigenvector of lambda3 (sign arbitrary)
+};
+
+/// The eigenvalues of the symmetric covariance `c` and the eigenvector of the smallest, or nullopt
+/// when this method cannot give them accurately: lambda2 - lambda3 < 1e-3 (lambda1 - lambda3)
+/// (e3 ill-conditioned; Newton slow near the double root), c not positive semi-definite beyond
+/// rounding, c zero or not finite. Callers then use a general solver.
+std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c);
+
+}  // namespace lidarsurf

@@ -1,0 +1,70 @@
+#include "lidarsurf/surface/symmetric_eigen.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+namespace lidarsurf {
+
+std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
+    // Shifted by the mean eigenvalue, as Eigen's computeDirect: the trace-free b = c - (T/3) I has
+    // the eigenvalues lambda - T/3, and its polynomial p(l) = l^3 + m l - d (m = sum of b's principal
+    // 2x2 minors, d = det b) rounds relative to b's spread rather than to T: without the shift a
+    // nearly isotropic covariance would lose lambda3 to rounding.
+    const double t = c(0, 0) + c(1, 1) + c(2, 2);
+    if (!(t > 0) || !std::isfinite(t)) return std::nullopt;
+    const double shift = t / 3.0;
+    const double xx = c(0, 0) - shift, xy = c(0, 1), xz = c(0, 2), yy = c(1, 1) - shift, yz = c(1, 2), zz = c(2, 2) - shift;
+    const double m = xx * yy - xy * xy + xx * zz - xz * xz + yy * zz - yz * yz;
+    const double d = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+    if (!std::isfinite(m + d)) return std::nullopt;
+
+    // b's smallest eigenvalue lambda3 - T/3 is in [-T/3, 0] for a PSD c. Newton on p from just
+    // left of -T/3: there p is increasing and concave (p'' = 6 l < 0), so the iterates rise
+    // monotonically to the root; for a planar neighbourhood (lambda3 << lambda2) the start is
+    // already within lambda3 of it (4-5 steps to rounding). In exact arithmetic the steps shrink
+    // strictly, quadratically near a simple root, by about half far from a double one; so the
+    // first step that does not shrink is rounding, and the iterate is the root to rounding.
+    // After 50 steps (a near-double root) the caller's solver takes over.
+    double l = -shift - 1e-12 * t;
+    if ((l * l + m) * l - d > 0) return std::nullopt;  // a root below l: c is not PSD
+    double last = HUGE_VAL;
+    bool converged = false;
+    for (int i = 0; i < 50; ++i) {
+        const double p = (l * l + m) * l - d;
+        const double dp = 3.0 * l * l + m;
+        if (!(dp > 0)) return std::nullopt;  // at a multiple root
+        const double step = p / dp;
+        if (!(std::fabs(step) < last) || std::fabs(step) <= 1e-17 * t) {
+            converged = true;
+            break;
+        }
+        l -= step;
+        last = std::fabs(step);
+    }
+    if (!converged) return std::nullopt;
+
+    // b's other two eigenvalues: their sum is -l (trace 0) and their product m + l^2 (m is the sum
+    // of the pairwise products).
+    PlaneEigen out;
+    const double r = std::sqrt(std::max(-m - 0.75 * l * l, 0.0));
+    out.lambda1 = shift - 0.5 * l + r;
+    out.lambda2 = shift - 0.5 * l - r;
+    out.lambda3 = shift + l;
+    // e3 is accurate to about (rounding of lambda3) / (lambda2 - lambda3): refuse small gaps.
+    if (!(out.lambda2 - out.lambda3 >= 1e-3 * (out.lambda1 - out.lambda3))) return std::nullopt;
+
+    // e3: c - lambda3 I = b - l I has rank 2; its kernel is the cross product of two of its rows
+    // (the largest of the three: the two most independent).
+    const Eigen::Vector3d r0(xx - l, xy, xz), r1(xy, yy - l, yz), r2(xz, yz, zz - l);
+    const Eigen::Vector3d c01 = r0.cross(r1), c02 = r0.cross(r2), c12 = r1.cross(r2);
+    const double n01 = c01.squaredNorm(), n02 = c02.squaredNorm(), n12 = c12.squaredNorm();
+    const Eigen::Vector3d& best = n01 >= n02 ? (n01 >= n12 ? c01 : c12) : (n02 >= n12 ? c02 : c12);
+    const double norm2 = std::max({n01, n02, n12});
+    if (!(norm2 > 0)) return std::nullopt;
+    out.e3 = best / std::sqrt(norm2);
+    return out;
+}
+
+}  // namespace lidarsurf

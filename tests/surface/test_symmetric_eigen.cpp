@@ -1,0 +1,103 @@
+// plane_eigen against Eigen's iterative solver (the oracle) on random symmetric covariances of
+// the shapes planes meet: flat patches, strips, isotropic discs, lines (refused), scaled over
+// twelve decades; and the matrices it must refuse.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include "lidarsurf/surface/symmetric_eigen.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+
+// R diag(l1, l2, l3) R^T for a rotation R; R's columns are the true eigenvectors.
+Eigen::Matrix3d with_eigen(double l1, double l2, double l3, const Eigen::Matrix3d& r) {
+    return r * Eigen::Vector3d(l1, l2, l3).asDiagonal() * r.transpose();
+}
+
+Eigen::Matrix3d random_rotation(std::mt19937& rng) {
+    std::normal_distribution<double> g;
+    return Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+}
+
+TEST(PlaneEigen, MatchesTheIterativeSolverOnRandomCovariances) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int solved = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        // Eigenvalues spread over 8 decades below the largest, times a scale from 1e-6 to 1e6.
+        const double scale = std::pow(10.0, 12.0 * u(rng) - 6.0);
+        double l[3];
+        for (double& x : l) x = scale * std::pow(10.0, -8.0 * u(rng));
+        std::sort(l, l + 3, std::greater<>());
+        const Eigen::Matrix3d r = random_rotation(rng);
+        const Eigen::Matrix3d c = with_eigen(l[0], l[1], l[2], r);
+        const auto eig = plane_eigen(c);
+        const double spread = l[0] - l[2], gap3 = l[1] - l[2];
+        // Refused exactly when lambda2 - lambda3 is within 1e-3 of the spread (up to rounding).
+        if (gap3 < 0.99e-3 * spread) {
+            EXPECT_FALSE(eig) << trial;
+            continue;
+        }
+        if (gap3 > 1.01e-3 * spread) {
+            ASSERT_TRUE(eig) << trial;
+        }
+        if (!eig) continue;
+        ++solved;
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> oracle(c);
+        const Eigen::Vector3d ev = oracle.eigenvalues();
+        // lambda3 to rounding; lambda1 and lambda2 come from a quadratic, whose roots carry
+        // eps s^2 / (lambda1 - lambda2) of error (sqrt(eps) when they coincide) while their sum and
+        // product, which the planarity guard and Eq. (3) use, stay exact.
+        const double tol = 1e-12 * l[0];
+        const double tol12 = std::min(tol + 1e-15 * l[0] * l[0] / (l[0] - l[1]), 3e-8 * l[0]);
+        EXPECT_NEAR(eig->lambda1, ev[2], tol12) << trial;
+        EXPECT_NEAR(eig->lambda2, ev[1], tol12) << trial;
+        EXPECT_NEAR(eig->lambda1 + eig->lambda2, ev[2] + ev[1], tol) << trial;
+        EXPECT_NEAR(eig->lambda1 * eig->lambda2, ev[2] * ev[1], tol * l[0]) << trial;
+        EXPECT_NEAR(eig->lambda3, ev[0], tol) << trial;
+        EXPECT_NEAR(eig->e3.norm(), 1.0, 1e-12);
+        // The normal: parallel to the true one, to ~eps * spread / gap (the problem's conditioning).
+        EXPECT_LT(eig->e3.cross(r.col(2)).norm(), 1e-12 * spread / gap3 + 1e-13) << trial;
+    }
+    EXPECT_GT(solved, 10000);  // log-uniform eigenvalues: a quarter of the draws are lines (lambda2 << lambda1)
+}
+
+TEST(PlaneEigen, DiscsStripsAndLines) {
+    std::mt19937 rng(11);
+    for (int trial = 0; trial < 200; ++trial) {
+        const Eigen::Matrix3d r = random_rotation(rng);
+        // An isotropic disc (lambda1 = lambda2) and a strip at the planarity guard's limit.
+        for (const double l2 : {0.04, 0.002}) {
+            const auto plane = plane_eigen(with_eigen(0.04, l2, 1e-6, r));
+            ASSERT_TRUE(plane);
+            EXPECT_LT(plane->e3.cross(r.col(2)).norm(), 1e-12);
+            EXPECT_NEAR(plane->lambda1, 0.04, 3e-8 * 0.04);  // sqrt(eps) for the disc (above)
+            EXPECT_NEAR(plane->lambda2, l2, 3e-8 * 0.04);
+            EXPECT_NEAR(plane->lambda1 + plane->lambda2, 0.04 + l2, 1e-15);
+            EXPECT_NEAR(plane->lambda1 * plane->lambda2, 0.04 * l2, 1e-16);
+            EXPECT_NEAR(plane->lambda3, 1e-6, 1e-15);
+        }
+        // Exactly flat (lambda3 = 0) and a line (lambda2 = lambda3): the first solved, the second refused.
+        const auto flat = plane_eigen(with_eigen(0.04, 0.01, 0.0, r));
+        ASSERT_TRUE(flat);
+        EXPECT_NEAR(flat->lambda3, 0.0, 1e-16);
+        EXPECT_LT(flat->e3.cross(r.col(2)).norm(), 1e-12);
+        EXPECT_FALSE(plane_eigen(with_eigen(0.04, 1e-6, 1e-6, r)));
+    }
+    EXPECT_FALSE(plane_eigen(0.3 * Eigen::Matrix3d::Identity()));  // every direction a normal
+    EXPECT_FALSE(plane_eigen(Eigen::Matrix3d::Zero()));
+    EXPECT_FALSE(plane_eigen(with_eigen(0.04, 0.01, -1e-3, Eigen::Matrix3d::Identity())));  // not PSD
+    Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
+    nan(0, 1) = nan(1, 0) = std::nan("");
+    EXPECT_FALSE(plane_eigen(nan));
+}
+
+}  // namespace
