@@ -3,6 +3,7 @@
 // to IMLS, and the scaling with input size and threads (issue 5). Without scans it simulates
 // HDL-64 frames of the procedural town.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <numeric>
@@ -35,6 +36,61 @@ double peak_rss_mib() {
     while (std::getline(f, line))
         if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
     return -1;
+}
+
+// The first value of `key` in /proc/cpuinfo ("" when absent).
+std::string cpuinfo(const std::string& key) {
+    std::ifstream f("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(f, line))
+        if (line.rfind(key, 0) == 0 && line.find(':') != std::string::npos) {
+            const std::string value = line.substr(line.find(':') + 1);
+            return value.substr(std::min(value.find_first_not_of(' '), value.size()));
+        }
+    return "";
+}
+std::string first_line(const std::string& path) {
+    std::ifstream f(path);
+    std::string line;
+    std::getline(f, line);
+    return line;
+}
+
+// The machine's CPU time so far (/proc/stat, all CPUs, in clock ticks): all of it, and the part
+// stolen by the hypervisor (time this VM's CPUs were runnable but ran another guest).
+struct CpuTimes {
+    double total = 0, steal = 0;
+};
+CpuTimes cpu_times() {
+    std::istringstream in(first_line("/proc/stat"));  // cpu user nice system idle iowait irq softirq steal ...
+    std::string label;
+    in >> label;
+    CpuTimes t;
+    double v;
+    for (int i = 0; in >> v; ++i) {
+        if (i < 8) t.total += v;  // guest time is already counted in user
+        if (i == 7) t.steal = v;
+    }
+    return t;
+}
+
+// What the times depend on, for comparing runs across machines: the CPU (model, family/model, the
+// clock now), the unified caches of CPU 0, and the host's CPU pressure (PSI "some" avg60: the share
+// of time a runnable task here waited for a CPU).
+std::string machine_description() {
+    std::ostringstream out;
+    out << (cpuinfo("model name").empty() ? "unknown CPU" : cpuinfo("model name"));
+    if (!cpuinfo("cpu family").empty()) out << " (family " << cpuinfo("cpu family") << " model " << cpuinfo("model") << ")";
+    if (!cpuinfo("cpu MHz").empty()) out << ", " << std::lround(std::stod(cpuinfo("cpu MHz"))) << " MHz";
+    for (int i = 0; i < 8; ++i) {
+        const std::string dir = "/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(i) + "/";
+        if (first_line(dir + "type") != "Unified") continue;
+        out << ", L" << first_line(dir + "level") << " " << first_line(dir + "size");
+    }
+    const std::string psi = first_line("/proc/pressure/cpu");  // some avg10=.. avg60=.. avg300=.. total=..
+    const auto at = psi.find("avg60=");
+    if (at != std::string::npos) out << "; host CPU pressure " << psi.substr(at + 6, psi.find(' ', at) - at - 6) << " %";
+    return out.str();
 }
 
 double median(std::vector<double> v) {
@@ -212,6 +268,7 @@ int run_bench(const BenchOptions& o) {
         if (!tmp.empty()) fs::remove_all(tmp, ec);
     };
     try {
+        const CpuTimes start = cpu_times();
         std::vector<Row> rows, size_rows, thread_rows;
         for (const auto& [path, label] : scans) {
             std::fprintf(stderr, "bench: %s\n", label.c_str());
@@ -230,6 +287,14 @@ int run_bench(const BenchOptions& o) {
                     "(reference and IMLS: %d), min = fastest run; %u hardware threads\n",
                     std::string(to_string(method.config.mode)).c_str(), method.config.voxel_size, method.config.tau,
                     method.config.n_min, method.config.k_max, o.repeat, o.slow_repeat, std::thread::hardware_concurrency());
+        // The share of the machine's CPU time the hypervisor stole during the run: on a shared host
+        // another tenant's load shows there (and not in the PSI above), and inflates every time.
+        const CpuTimes end = cpu_times();
+        const double steal = end.total > start.total ? 100.0 * (end.steal - start.steal) / (end.total - start.total) : 0.0;
+        char steal_text[64];
+        std::snprintf(steal_text, sizeof steal_text, "; CPU time stolen by the hypervisor during the run %.1f %%", steal);
+        const std::string machine = machine_description() + steal_text;
+        std::printf("machine: %s\n", machine.c_str());
         std::printf("total = read + insert + tsdf + mesh (IMLS: insert = normals, tsdf = implicit function)\n\n");
         std::fputs(format_rows(rows, true).c_str(), stdout);
         if (!size_rows.empty()) {
@@ -242,6 +307,7 @@ int run_bench(const BenchOptions& o) {
         }
         if (!o.json.empty()) {
             nlohmann::json j;
+            j["machine"] = machine;
             for (const char* key : {"rows", "sizes", "threads"}) j[key] = nlohmann::json::array();
             for (const Row& r : rows) j["rows"].push_back(to_json(r));
             for (const Row& r : size_rows) j["sizes"].push_back(to_json(r));

@@ -29,6 +29,10 @@ expect 2 "threshold" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --threshol
 expect 3 "not a PLY" -- "$cli" evaluate "$dir/gt.bin" "$dir/gt.bin"
 expect 4 "cannot open" -- "$cli" evaluate "$dir/mesh.ply" "$dir/nothere.bin"
 expect 2 "refusing" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --json "$dir/gt.bin"
+# The speed bench on a given scan: its table, and the machine it ran on (CPU, caches, stolen time).
+expect 0 "machine: .*stolen by the hypervisor" -- "$cli" bench "$dir/scan.bin" --repeat 1 --no-reference --no-imls --no-scaling --json "$dir/bench.json"
+grep -q '"machine": ".*L[23]' "$dir/bench.json" || { echo "FAIL: bench --json lacks the machine or its caches"; fail=$((fail + 1)); }
+expect 2 "" -- "$cli" bench "$dir/scan.bin" --repeat 0
 # Simulator, renderer and benchmark.
 seq="$dir/seq"
 expect 0 "simulated 2 frames" -- "$cli" simulate --scene town --sensor vlp16 --frames 2 --length 100 --gt-beams 48 -o "$seq"
