@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -81,7 +82,8 @@ std::string machine_description() {
     std::ostringstream out;
     out << (cpuinfo("model name").empty() ? "unknown CPU" : cpuinfo("model name"));
     if (!cpuinfo("cpu family").empty()) out << " (family " << cpuinfo("cpu family") << " model " << cpuinfo("model") << ")";
-    if (!cpuinfo("cpu MHz").empty()) out << ", " << std::lround(std::stod(cpuinfo("cpu MHz"))) << " MHz";
+    const double mhz = std::strtod(cpuinfo("cpu MHz").c_str(), nullptr);  // 0 when absent or unreadable
+    if (mhz > 0) out << ", " << std::lround(mhz) << " MHz";
     for (int i = 0; i < 8; ++i) {
         const std::string dir = "/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(i) + "/";
         if (first_line(dir + "type") != "Unified") continue;
