@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <numeric>
 #include <sstream>
 #include <thread>
@@ -39,16 +40,19 @@ double peak_rss_mib() {
     return -1;
 }
 
-// The first value of `key` in /proc/cpuinfo ("" when absent).
-std::string cpuinfo(const std::string& key) {
+// The fields of the first CPU in /proc/cpuinfo ("model name" -> "AMD EPYC", ...).
+std::map<std::string, std::string> cpuinfo() {
+    std::map<std::string, std::string> fields;
     std::ifstream f("/proc/cpuinfo");
     std::string line;
-    while (std::getline(f, line))
-        if (line.rfind(key, 0) == 0 && line.find(':') != std::string::npos) {
-            const std::string value = line.substr(line.find(':') + 1);
-            return value.substr(std::min(value.find_first_not_of(' '), value.size()));
-        }
-    return "";
+    while (std::getline(f, line) && !line.empty()) {  // a blank line ends the first CPU's block
+        const auto colon = line.find(':');
+        if (colon == std::string::npos || colon == 0) continue;
+        const std::string key = line.substr(0, line.find_last_not_of(" \t", colon - 1) + 1);
+        const auto start = line.find_first_not_of(' ', colon + 1);
+        fields.emplace(key, start == std::string::npos ? "" : line.substr(start));
+    }
+    return fields;
 }
 std::string first_line(const std::string& path) {
     std::ifstream f(path);
@@ -76,13 +80,14 @@ CpuTimes cpu_times() {
 }
 
 // What the times depend on, for comparing runs across machines: the CPU (model, family/model, the
-// clock now), the unified caches of CPU 0, and the host's CPU pressure (PSI "some" avg60: the share
-// of time a runnable task here waited for a CPU).
+// clock now), the unified caches of CPU 0, and the CPU pressure (PSI "some" avg60: the share of
+// time a runnable task of this machine waited for a CPU; in a VM it does not see other guests).
 std::string machine_description() {
+    auto cpu = cpuinfo();
     std::ostringstream out;
-    out << (cpuinfo("model name").empty() ? "unknown CPU" : cpuinfo("model name"));
-    if (!cpuinfo("cpu family").empty()) out << " (family " << cpuinfo("cpu family") << " model " << cpuinfo("model") << ")";
-    const double mhz = std::strtod(cpuinfo("cpu MHz").c_str(), nullptr);  // 0 when absent or unreadable
+    out << (cpu["model name"].empty() ? "unknown CPU" : cpu["model name"]);
+    if (!cpu["cpu family"].empty()) out << " (family " << cpu["cpu family"] << " model " << cpu["model"] << ")";
+    const double mhz = std::strtod(cpu["cpu MHz"].c_str(), nullptr);  // 0 when absent or unreadable
     if (mhz > 0) out << ", " << std::lround(mhz) << " MHz";
     for (int i = 0; i < 8; ++i) {
         const std::string dir = "/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(i) + "/";
@@ -91,7 +96,7 @@ std::string machine_description() {
     }
     const std::string psi = first_line("/proc/pressure/cpu");  // some avg10=.. avg60=.. avg300=.. total=..
     const auto at = psi.find("avg60=");
-    if (at != std::string::npos) out << "; host CPU pressure " << psi.substr(at + 6, psi.find(' ', at) - at - 6) << " %";
+    if (at != std::string::npos) out << "; CPU pressure (PSI) " << psi.substr(at + 6, psi.find(' ', at) - at - 6) << " %";
     return out.str();
 }
 
