@@ -2,7 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "lidarsurf/surface/symmetric_eigen.hpp"
+#include "lidarsurf/surface/plane_eigen.hpp"
 
 namespace lidarsurf {
 

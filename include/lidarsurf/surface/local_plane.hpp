@@ -19,7 +19,7 @@ struct LocalPlane {
 };
 
 /// How the 3x3 covariance is diagonalised: Eigen's iterative QL (the reference), or the fast path's
-/// closed form: plane_eigen (symmetric_eigen.hpp: Newton for lambda3, the normal as a kernel), and
+/// closed form: plane_eigen (plane_eigen.hpp: Newton for lambda3, the normal as a kernel), and
 /// Eigen's trigonometric computeDirect where that refuses (lambda2 ~ lambda3). Normals accurate to
 /// ~1e-10 rad unless two eigenvalues nearly coincide.
 enum class EigenSolver { Iterative, ClosedForm };

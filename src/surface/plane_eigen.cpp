@@ -1,4 +1,4 @@
-#include "lidarsurf/surface/symmetric_eigen.hpp"
+#include "lidarsurf/surface/plane_eigen.hpp"
 
 #include <algorithm>
 #include <cmath>

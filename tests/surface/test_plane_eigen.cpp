@@ -11,7 +11,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
-#include "lidarsurf/surface/symmetric_eigen.hpp"
+#include "lidarsurf/surface/plane_eigen.hpp"
 
 using namespace lidarsurf;
 
