@@ -28,11 +28,11 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
     // first step that does not shrink is rounding, and the iterate is the root to rounding.
     // After 50 steps (a near-double root) the caller's solver takes over.
     double l = -shift - 1e-12 * t;
-    if ((l * l + m) * l - d > 0) return std::nullopt;  // a root below l: c is not PSD
+    double p = (l * l + m) * l - d;
+    if (p > 0) return std::nullopt;  // a root below l: c is not PSD
     double last = HUGE_VAL;
     bool converged = false;
     for (int i = 0; i < 50; ++i) {
-        const double p = (l * l + m) * l - d;
         const double dp = 3.0 * l * l + m;
         if (!(dp > 0)) return std::nullopt;  // at a multiple root
         const double step = p / dp;
@@ -42,6 +42,7 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
         }
         l -= step;
         last = std::fabs(step);
+        p = (l * l + m) * l - d;
     }
     if (!converged) return std::nullopt;
 
@@ -59,11 +60,12 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
     // (the largest of the three: the two most independent).
     const Eigen::Vector3d r0(xx - l, xy, xz), r1(xy, yy - l, yz), r2(xz, yz, zz - l);
     const Eigen::Vector3d c01 = r0.cross(r1), c02 = r0.cross(r2), c12 = r1.cross(r2);
-    const double n01 = c01.squaredNorm(), n02 = c02.squaredNorm(), n12 = c12.squaredNorm();
-    const Eigen::Vector3d& best = n01 >= n02 ? (n01 >= n12 ? c01 : c12) : (n02 >= n12 ? c02 : c12);
-    const double norm2 = std::max({n01, n02, n12});
+    const Eigen::Vector3d* best = &c01;
+    double norm2 = c01.squaredNorm();
+    for (const Eigen::Vector3d* row_cross : {&c02, &c12})
+        if (row_cross->squaredNorm() > norm2) best = row_cross, norm2 = row_cross->squaredNorm();
     if (!(norm2 > 0)) return std::nullopt;
-    out.e3 = best / std::sqrt(norm2);
+    out.e3 = *best / std::sqrt(norm2);
     return out;
 }
 
