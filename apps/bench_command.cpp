@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -165,6 +166,68 @@ Row run_row(const fs::path& scan, const std::string& label, Path path, const Met
     return row;
 }
 
+// Incremental re-meshing (issue 5): `scan` split into `sectors` azimuth sectors around the
+// sensor (as a spinning lidar delivers its packets), each integrated and followed by an
+// extraction. Row "fast": a new Reconstructor per sector on everything so far (no reuse); row
+// "reuse": one Reconstructor for the revolution, whose extractions redo only what the new
+// sector can reach. Times are the sums over the revolution's sectors; the final meshes are
+// compared (they must be the same).
+std::vector<Row> run_sector_rows(const fs::path& scan, const Method& method, int threads, int repeat, int sectors) {
+    const PointCloud cloud = read_points(scan, method.read);
+    std::vector<PointCloud> parts(static_cast<std::size_t>(sectors));
+    for (const Eigen::Vector3d& p : cloud.points) {
+        const Eigen::Vector3d d = p - method.sensor;
+        const double azimuth = std::atan2(d.y(), d.x()) + M_PI;  // [0, 2 pi]
+        const int s = std::clamp(static_cast<int>(azimuth / (2 * M_PI) * sectors), 0, sectors - 1);
+        parts[static_cast<std::size_t>(s)].points.push_back(p);
+    }
+    ReconstructionConfig c = method.config;
+    c.threads = threads;
+    const std::string label = std::to_string(sectors) + " sectors";
+    std::vector<Row> rows(2);
+    Mesh last[2];
+    for (int reuse = 0; reuse < 2; ++reuse) {
+        Row& row = rows[static_cast<std::size_t>(reuse)];
+        row.scan = label;
+        row.path = reuse ? "reuse" : "fast";
+        row.threads = threads;
+        row.repeat = repeat;
+        row.points = cloud.points.size();
+        reset_peak_rss();
+        for (int r = 0; r < repeat; ++r) {
+            double insert = 0, tsdf = 0, mesh_ms = 0;
+            std::optional<Reconstructor> rec;
+            PointCloud so_far;
+            for (const PointCloud& part : parts) {
+                if (reuse) {
+                    if (!rec) rec.emplace(c, method.sensor);
+                    rec->integrate(part);
+                } else {
+                    so_far.points.insert(so_far.points.end(), part.points.begin(), part.points.end());
+                    rec.emplace(c, method.sensor);
+                    rec->integrate(so_far);
+                }
+                if (part.points.empty()) continue;
+                last[reuse] = rec->extract_mesh();
+                insert += 1e3 * rec->summary().seconds_insert;  // reuse: cumulative over the integrations
+                tsdf += 1e3 * rec->summary().seconds_tsdf;
+                mesh_ms += 1e3 * rec->summary().seconds_mesh;
+            }
+            if (reuse) insert = 1e3 * rec->summary().seconds_insert;
+            row.triangles = last[reuse].triangles.size();
+            row.read.push_back(0);
+            row.insert.push_back(insert);
+            row.tsdf.push_back(tsdf);
+            row.mesh.push_back(mesh_ms);
+            row.total.push_back(insert + tsdf + mesh_ms);
+        }
+        row.peak_rss = peak_rss_mib();
+    }
+    if (last[0].vertices != last[1].vertices || last[0].triangles != last[1].triangles)
+        throw Error("bench: the incremental re-mesh differs from the mesh of one extraction (a bug; please report it)");
+    return rows;
+}
+
 std::string format_rows(const std::vector<Row>& rows, bool ratios) {
     std::ostringstream out;
     char buf[320];
@@ -240,7 +303,7 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     b->add_option("--frames", o.frames, "Simulated frames when no scan is given")->capture_default_str();
     b->add_flag("--no-reference", o.no_reference, "Skip the reference path");
     b->add_flag("--no-imls", o.no_imls, "Skip IMLS");
-    b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables");
+    b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables and the incremental re-meshing table");
     b->add_option("--json", o.json, "Also write every row (all run times) as JSON");
     add_reconstruct_options(b, o.reconstruct);
     b->footer("Example:\n  lidarsurf bench                      # simulated town frames\n"
@@ -276,7 +339,7 @@ int run_bench(const BenchOptions& o) {
     };
     try {
         const CpuTimes start = cpu_times();
-        std::vector<Row> rows, size_rows, thread_rows;
+        std::vector<Row> rows, size_rows, thread_rows, sector_rows;
         for (const auto& [path, label] : scans) {
             std::fprintf(stderr, "bench: %s\n", label.c_str());
             rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
@@ -288,6 +351,10 @@ int run_bench(const BenchOptions& o) {
             for (const auto& [path, label] : sizes) size_rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
             const auto& mid = sizes.size() == 4 ? sizes[2] : sizes.front();
             for (int t : {1, 2}) thread_rows.push_back(run_row(mid.first, mid.second, Path::Fast, method, t, o.repeat));
+            if (method.config.seeded_surface) {
+                std::fprintf(stderr, "bench: %s in sectors\n", mid.second.c_str());
+                sector_rows = run_sector_rows(mid.first, method, threads, o.slow_repeat, 10);
+            }
         }
 
         std::printf("lidarsurf bench: mode %s, alpha %.3g m, tau %.3g, N_min %d, k_max %d; times in ms, median of %d runs "
@@ -312,10 +379,18 @@ int run_bench(const BenchOptions& o) {
             const double s = thread_rows[0].median_total() / thread_rows[1].median_total();
             std::printf("speed-up 1 -> 2 threads: %.2fx\n", s);
         }
+        if (!sector_rows.empty()) {
+            std::printf("\nincremental re-meshing, %s delivered in 10 azimuth sectors, a mesh after each (sums over the\n"
+                        "revolution; fast = a new reconstruction of all sectors so far each time, reuse = one Reconstructor\n"
+                        "that re-evaluates only what the new sector reaches; the same final mesh):\n",
+                        (sizes.size() == 4 ? sizes[2] : sizes.front()).second.c_str());
+            std::fputs(format_rows(sector_rows, true).c_str(), stdout);
+        }
         if (!o.json.empty()) {
             nlohmann::json j;
             j["machine"] = machine;
-            for (const char* key : {"rows", "sizes", "threads"}) j[key] = nlohmann::json::array();
+            for (const char* key : {"rows", "sizes", "threads", "sectors"}) j[key] = nlohmann::json::array();
+            for (const Row& r : sector_rows) j["sectors"].push_back(to_json(r));
             for (const Row& r : rows) j["rows"].push_back(to_json(r));
             for (const Row& r : size_rows) j["sizes"].push_back(to_json(r));
             for (const Row& r : thread_rows) j["threads"].push_back(to_json(r));

@@ -28,9 +28,9 @@ const ReconstructionConfig& validated(const ReconstructionConfig& c) {
 std::string ReconstructionSummary::to_string() const {
     char buf[512];
     std::snprintf(buf, sizeof buf,
-                  "points %zu (dropped %zu non-finite), voxels %zu, vertices evaluated %zu, defined %zu, "
+                  "points %zu (dropped %zu non-finite), voxels %zu, vertices evaluated %zu (reused %zu), defined %zu, "
                   "mesh %zu vertices %zu triangles, memory estimate %.0f MiB; time insert %.1f ms, tsdf %.1f ms, mesh %.1f ms, total %.1f ms",
-                  points_read, points_dropped, voxels, candidate_vertices, defined_vertices, mesh_vertices, mesh_triangles,
+                  points_read, points_dropped, voxels, candidate_vertices, reused_vertices, defined_vertices, mesh_vertices, mesh_triangles,
                   static_cast<double>(memory_estimate) / 1048576.0,
                   1e3 * seconds_insert, 1e3 * seconds_tsdf, 1e3 * seconds_mesh,
                   1e3 * (seconds_insert + seconds_tsdf + seconds_mesh));
@@ -70,7 +70,8 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + std::to_string(summary_.points_read) + " dropped)");
     const auto budget = static_cast<std::size_t>(budget_bytes());
-    summary_.memory_estimate = grid_.memory_bytes() + estimate_extraction_bytes(grid_, config_, evaluation, budget);
+    summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) +
+                               estimate_extraction_bytes(grid_, config_, evaluation, budget);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
                                         std::to_string(grid_.size()) + " voxels in " + std::to_string(grid_.index().block_count()) +
@@ -81,16 +82,21 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     arena.execute([&] {
         auto t0 = std::chrono::steady_clock::now();
         if (config_.seeded_surface && evaluation == Evaluation::Fast) {
-            const SeededTsdf seeded = compute_seeded_tsdf(grid_, config_, sensor_);
+            SeededTsdf seeded = compute_seeded_tsdf(grid_, config_, sensor_, EigenSolver::ClosedForm, previous_ ? &*previous_ : nullptr);
             summary_.seconds_tsdf = seconds_since(t0);
             summary_.candidate_vertices = seeded.evaluated;
+            summary_.reused_vertices = seeded.reused;
             summary_.defined_vertices = seeded.field.size();
             t0 = std::chrono::steady_clock::now();
             mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, placement);
+            // The next extraction redoes only what the points integrated from now on can reach.
+            previous_ = std::move(seeded.field);
+            grid_.clear_touched();
         } else {
             TsdfStats stats;
             const TsdfField field = compute_tsdf(grid_, config_, sensor_, &stats);
             summary_.candidate_vertices = stats.candidates;
+            summary_.reused_vertices = 0;
             summary_.defined_vertices = stats.defined;
             if (config_.seeded_surface) {
                 const std::vector<VoxelKey> cubes = seeded_cubes(field, grid_, config_.seed_dilation);

@@ -2,6 +2,7 @@
 // The reconstruction pipeline (Sec. III): points -> voxel statistics -> adaptive TSDF ->
 // marching cubes. Composes the modules; holds the voxel grid so more scans can be integrated.
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -11,6 +12,7 @@
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/surface/tsdf_field.hpp"
 
 namespace lidarsurf {
 
@@ -18,7 +20,8 @@ struct ReconstructionSummary {
     std::size_t points_read = 0;
     std::size_t points_dropped = 0;  ///< non-finite coordinates
     std::size_t voxels = 0;
-    std::size_t candidate_vertices = 0;
+    std::size_t candidate_vertices = 0;  ///< vertices evaluated by the last extraction
+    std::size_t reused_vertices = 0;     ///< vertices the last extraction took from the one before
     std::size_t defined_vertices = 0;
     std::size_t mesh_vertices = 0;
     std::size_t mesh_triangles = 0;
@@ -49,6 +52,12 @@ public:
 
     /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated and
     /// ResourceLimit if the grid plus estimate_extraction_bytes exceeds config.max_memory_mb.
+    ///
+    /// Incremental: integrate, extract, integrate more, extract again re-evaluates only the
+    /// vertices that the new points can reach (the blocks within max_reach() of a block that
+    /// received a point, VoxelGrid::touched_blocks); the fast path keeps the previous field for
+    /// that (summary().reused_vertices). The mesh is the one a single extraction after all the
+    /// integrations gives. The reference path always evaluates every vertex.
     Mesh extract_mesh(Evaluation evaluation = Evaluation::Fast);
 
     const ReconstructionSummary& summary() const { return summary_; }
@@ -62,6 +71,7 @@ private:
     ReconstructionConfig config_;
     Eigen::Vector3d sensor_;
     VoxelGrid grid_;
+    std::optional<TsdfField> previous_;  // the last fast extraction's field, for the next one
     ReconstructionSummary summary_;
 };
 

@@ -229,6 +229,59 @@ PYBIND11_MODULE(_lidarsurf, m) {
             return "Mesh(" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.triangles.size()) + " triangles)";
         });
 
+    py::class_<Reconstructor>(m, "Reconstructor",
+                              "A reconstruction that accepts more points: integrate() scans or parts of scans seen from the same "
+                              "origin, extract_mesh() whenever a mesh is needed. Each extraction re-evaluates only the vertices the "
+                              "points integrated since the previous one can reach, and gives the mesh one extraction of all the "
+                              "points would give.")
+        .def(py::init([](std::optional<ReconstructionConfig> config, const std::vector<double>& origin) {
+                 return Reconstructor(config.value_or(ReconstructionConfig{}), as_vec3(origin, "origin"));
+             }),
+             py::arg("config") = py::none(), py::arg("origin") = std::vector<double>{0, 0, 0},
+             "config: a Config (paper defaults when None); origin: the sensor position that orients the normals (Eq. 2). "
+             "Raises ValueError on a bad parameter.")
+        .def(
+            "integrate",
+            [](Reconstructor& rec, const py::handle& points) {
+                const PointArray view = points_view(points, "points");
+                py::gil_scoped_release release;
+                rec.integrate(as_span(view));
+            },
+            py::arg("points"),
+            "Add an (N, 3) float32/float64 array of points to the voxel statistics; non-finite points are counted as dropped. "
+            "Raises MemoryError past the memory budget.")
+        .def(
+            "extract_mesh",
+            [](Reconstructor& rec) {
+                py::gil_scoped_release release;
+                return rec.extract_mesh();
+            },
+            "The mesh of every point integrated so far. Raises ValueError if no finite point was integrated.")
+        .def_property_readonly(
+            "summary",
+            [](const Reconstructor& rec) {
+                const ReconstructionSummary& s = rec.summary();
+                py::dict d;
+                d["points_read"] = s.points_read;
+                d["points_dropped"] = s.points_dropped;
+                d["voxels"] = s.voxels;
+                d["vertices_evaluated"] = s.candidate_vertices;
+                d["vertices_reused"] = s.reused_vertices;
+                d["vertices_defined"] = s.defined_vertices;
+                d["mesh_vertices"] = s.mesh_vertices;
+                d["mesh_triangles"] = s.mesh_triangles;
+                d["seconds_insert"] = s.seconds_insert;
+                d["seconds_tsdf"] = s.seconds_tsdf;
+                d["seconds_mesh"] = s.seconds_mesh;
+                return d;
+            },
+            "Counts and times as a dict: points_read, points_dropped, voxels, and of the last extraction vertices_evaluated, "
+            "vertices_reused (taken from the extraction before), vertices_defined, mesh_vertices, mesh_triangles, "
+            "seconds_tsdf, seconds_mesh; seconds_insert sums every integrate().")
+        .def("__repr__", [](const Reconstructor& rec) {
+            return "Reconstructor(" + std::to_string(rec.summary().points_read) + " points, " + std::to_string(rec.grid().size()) + " voxels)";
+        });
+
     m.def("points_view", [](const py::handle& points) { return points_view(points, "points"); }, py::arg("points"),
           "The (N, 3) float64 C-contiguous array reconstruct() reads: the input itself when it already is one (no copy).");
 

@@ -174,3 +174,26 @@ def test_evaluate_returns_the_metrics(scan):
     assert m["paper"]["ae_sym"] == pytest.approx(0.1, abs=1e-9)
     with pytest.raises(ValueError, match="refers to vertex"):
         lidarsurf.Mesh(verts, np.array([[0, 1, 500]]))
+
+
+def test_reconstructor_meshes_incrementally_with_the_mesh_of_one_extraction(scan):
+    # A revolution in two halves (by azimuth), a mesh after each: the second mesh is the mesh of
+    # the whole scan, and its extraction took vertices from the first.
+    azimuth = np.arctan2(scan[:, 1], scan[:, 0])
+    first, second = scan[azimuth < 0], scan[azimuth >= 0]
+    rec = lidarsurf.Reconstructor(origin=(0, 0, 0))
+    rec.integrate(first)
+    half = rec.extract_mesh()
+    assert len(half.triangles) > 0 and rec.summary["vertices_reused"] == 0
+    rec.integrate(second)
+    mesh = rec.extract_mesh()
+    s = rec.summary
+    assert s["points_read"] == len(scan) and s["vertices_reused"] > 0 and s["vertices_evaluated"] > 0
+    whole = lidarsurf.reconstruct(np.concatenate([first, second]))
+    np.testing.assert_array_equal(mesh.vertices, whole.vertices)
+    np.testing.assert_array_equal(mesh.triangles, whole.triangles)
+    assert "Reconstructor(" in repr(rec)
+    with pytest.raises(ValueError, match="no points"):
+        lidarsurf.Reconstructor().extract_mesh()
+    with pytest.raises(ValueError):
+        lidarsurf.Reconstructor(config=lidarsurf.Config.paper("an"), origin=(0, 0))

@@ -1,24 +1,34 @@
 #include "lidarsurf/core/packed_voxels.hpp"
 
 #include <bit>
+#include <string>
 
 #include <tbb/parallel_for.h>
 
 #include "lidarsurf/core/block_mask.hpp"
+#include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
 
-PackedVoxels::PackedVoxels(const VoxelGrid& grid) : grid_(&grid) {
+void PackedVoxels::left_out(const VoxelKey& key) {
+    throw InvalidArgument("voxel block (" + std::to_string(key.x()) + ", " + std::to_string(key.y()) + ", " + std::to_string(key.z()) +
+                          ") was left out of the packed snapshot");
+}
+
+PackedVoxels::PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t>* only) : grid_(&grid) {
     const std::size_t blocks = grid.index().block_count();
+    if (only && only->size() != blocks) throw InvalidArgument("PackedVoxels: one flag per grid block expected");
+    auto packed = [&](std::size_t b) { return !only || (*only)[b]; };
     blocks_.resize(blocks);
     // Where each block's records start: a prefix sum of its occupied voxels.
     std::vector<std::size_t> start(blocks + 1, 0);
     for (std::size_t b = 0; b < blocks; ++b) {
-        start[b + 1] = start[b] + static_cast<std::size_t>(popcount(grid.occupancy(b)));
+        start[b + 1] = start[b] + (packed(b) ? static_cast<std::size_t>(popcount(grid.occupancy(b))) : 0);
     }
     voxels_.resize(start[blocks]);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 64), [&](const auto& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            if (!packed(b)) continue;  // occupancy stays nullptr: find() refuses it
             Block& block = blocks_[b];
             block.voxels = voxels_.data() + start[b];
             block.occupancy = &grid.occupancy(b);

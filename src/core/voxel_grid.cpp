@@ -45,7 +45,16 @@ std::int32_t VoxelGrid::voxel_index(const VoxelKey& key) {
     const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
     if (!last_block_ || block_key != last_block_key_) {
         const std::uint32_t b = index_.block_index(block_key);
-        if (b >= occupancy_.size()) occupancy_.resize(b + 1, Occupancy{});
+        if (b >= occupancy_.size()) {
+            occupancy_.resize(b + 1, Occupancy{});
+            touched_flag_.resize(b + 1, 0);
+        }
+        // Every point goes through here or through the cached block below, which was marked when
+        // it was cached (clear_touched() drops the cache).
+        if (!touched_flag_[b]) {
+            touched_flag_[b] = 1;
+            touched_.push_back(b);
+        }
         last_block_ = &index_.block_at(b);
         last_occupancy_ = &occupancy_[b];
         last_block_key_ = block_key;
@@ -118,9 +127,15 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points) {
     return dropped;
 }
 
+void VoxelGrid::clear_touched() {
+    for (std::uint32_t b : touched_) touched_flag_[b] = 0;
+    touched_.clear();
+    last_block_ = nullptr;  // so that the next point in the cached block marks it again
+}
+
 std::size_t VoxelGrid::memory_bytes() const {
     return index_.memory_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
-           keys_.capacity() * sizeof(VoxelKey);
+           keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t);
 }
 
 const VoxelStats* VoxelGrid::find(const VoxelKey& key) const {

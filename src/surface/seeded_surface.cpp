@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <optional>
 #include <thread>
 
@@ -228,8 +229,13 @@ public:
         double truncation;
         EvaluatedStore& defined;
         std::atomic<std::size_t>& evaluated;  ///< vertices evaluated, defined or not
+        const TsdfField* previous;            ///< values to reuse outside `dirty` (nullptr: none)
+        const BlockIndex& dirty;              ///< vertex blocks whose values may have changed
+        std::atomic<std::size_t>& reused;     ///< vertices taken from `previous`
     };
-    explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots) {}
+    explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots) {
+        if (shared.previous) previous_.emplace(*shared.previous);
+    }
 
     /// Vertex v's sample (nullptr if undefined), evaluating it if nobody has.
     const VertexSample* sample(const VoxelKey& v) {
@@ -237,11 +243,16 @@ public:
         std::atomic_ref<std::int32_t> slot(*const_cast<std::int32_t*>(values_.find(v)));
         std::int32_t state = slot.load(std::memory_order_acquire);
         if (state == kUnevaluated && slot.compare_exchange_strong(state, kBusy, std::memory_order_acq_rel)) {
-            VertexSample sample = evaluate_vertex(window(Slots::block_of(v)), v, s_.config, s_.sensor_local, s_.solver);
-            s_.evaluated.fetch_add(1, std::memory_order_relaxed);
             state = kUndefined;
-            if (sample.defined && std::fabs(sample.tsdf) <= s_.truncation)  // truncation as assemble_field
-                state = static_cast<std::int32_t>(s_.defined.push_back({v, sample}) - s_.defined.begin());
+            if (const std::optional<TsdfField::Known> known = reusable(v)) {
+                s_.reused.fetch_add(1, std::memory_order_relaxed);
+                if (known->sample) state = static_cast<std::int32_t>(s_.defined.push_back({v, *known->sample}) - s_.defined.begin());
+            } else {
+                VertexSample sample = evaluate_vertex(window(Slots::block_of(v)), v, s_.config, s_.sensor_local, s_.solver);
+                s_.evaluated.fetch_add(1, std::memory_order_relaxed);
+                if (sample.defined && std::fabs(sample.tsdf) <= s_.truncation)  // truncation as assemble_field
+                    state = static_cast<std::int32_t>(s_.defined.push_back({v, sample}) - s_.defined.begin());
+            }
             slot.store(state, std::memory_order_release);
         }
         while (state == kBusy) {
@@ -265,6 +276,18 @@ public:
     }
 
 private:
+    // What `previous` recorded for v when v's block is clean and v was evaluated then.
+    std::optional<TsdfField::Known> reusable(const VoxelKey& v) {
+        if (!previous_) return std::nullopt;
+        const VoxelKey block = Slots::block_of(v);
+        if (!clean_block_ || *clean_block_ != block) {
+            if (s_.dirty.find(block) != BlockIndex::kAbsent) return std::nullopt;
+            clean_block_ = block;
+        }
+        const TsdfField::Known known = previous_->known(v);
+        if (!known.evaluated) return std::nullopt;
+        return known;
+    }
     // The window of a vertex block, from the last few built (a cube's corners are in 1 to 8).
     const NeighbourhoodWindow& window(const VoxelKey& block) {
         for (int w = 0; w < kWindows; ++w)
@@ -280,13 +303,43 @@ private:
     std::array<std::optional<NeighbourhoodWindow>, kWindows> windows_;
     std::array<VoxelKey, kWindows> window_block_;
     int next_window_ = 0;
+    std::optional<VoxelKey> clean_block_;  // the last vertex block found clean
+    std::optional<TsdfField::Accessor> previous_;
 };
+
+// The blocks an incremental re-mesh must redo (compute_seeded_tsdf's `previous`): the vertex
+// blocks within `reach` blocks of a touched voxel block (their windows can see a new point),
+// and, as flags per grid block, the voxel blocks within 2 `reach` (what those windows read).
+struct DirtyRegion {
+    BlockIndex vertex_blocks;
+    std::vector<std::uint8_t> packed_blocks;
+};
+DirtyRegion dirty_region(const VoxelGrid& grid, int reach) {
+    DirtyRegion d;
+    const BlockMap<std::int32_t>& index = grid.index();
+    d.packed_blocks.assign(index.block_count(), 0);
+    for (std::uint32_t b : grid.touched_blocks()) {
+        const VoxelKey key = index.block_keys()[b];
+        for (int z = -2 * reach; z <= 2 * reach; ++z)
+            for (int y = -2 * reach; y <= 2 * reach; ++y)
+                for (int x = -2 * reach; x <= 2 * reach; ++x) {
+                    const VoxelKey near = key + VoxelKey(x, y, z);
+                    if (std::max({std::abs(x), std::abs(y), std::abs(z)}) <= reach) d.vertex_blocks.try_emplace(near, 0);
+                    const std::int64_t i = index.index_of(near);
+                    if (i >= 0) d.packed_blocks[static_cast<std::size_t>(i)] = 1;
+                }
+    }
+    return d;
+}
 
 }  // namespace
 
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
-                               EigenSolver solver) {
+                               EigenSolver solver, const TsdfField* previous) {
     config.validate();
+    // A window of vertex block b reads the voxel blocks within ceil(max_reach / 8) of b.
+    const int reach = (config.max_reach() + BlockMap<std::int32_t>::kSize - 1) / BlockMap<std::int32_t>::kSize;
+    const DirtyRegion dirty = previous ? dirty_region(grid, reach) : DirtyRegion{};
     using Slots = CornerEvaluator::Slots;
     Slots slots(CornerEvaluator::kUnevaluated);
     slots.reserve_blocks(grid.index().block_count() * 2);
@@ -295,10 +348,10 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // page faults only where written, and avoids the growth's smaller blocks (measured: 10k more
     // page faults per 16 frames without it); capped so a huge grid does not reserve gigabytes.
     defined_vertices.reserve(std::min<std::size_t>(4 * grid.size(), std::size_t{1} << 22));
-    std::atomic<std::size_t> evaluated{0};
-    const PackedVoxels packed(grid);
-    const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
-                                         defined_vertices, evaluated};
+    std::atomic<std::size_t> evaluated{0}, reused{0};
+    const PackedVoxels packed(grid, previous ? &dirty.packed_blocks : nullptr);
+    const CornerEvaluator::Shared shared{slots,           packed,  config, grid.to_local(sensor_world), solver, config.truncation_distance(),
+                                         defined_vertices, evaluated, previous, dirty.vertex_blocks, reused};
     CubeSearch search(grid);
 
     // Wave 0, the seeds (three quarters of the vertices on a lidar frame), in parallel per block:
@@ -346,6 +399,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     SeededTsdf out;
     out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave);
     out.evaluated = evaluated.load();
+    out.reused = reused.load();
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
     // offset), which does not depend on the thread count.

@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <bitset>
+#include <cstring>
 #include <map>
 #include <random>
 #include <tuple>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 
@@ -114,4 +116,34 @@ TEST(PackedVoxels, EveryVoxelIsFoundByRankWithItsStatistics) {
     }
     EXPECT_EQ(packed.find(VoxelKey(1000, 1000, 1000)), nullptr);
     for (int i = 0; i < 256; ++i) EXPECT_EQ(PackedVoxels::kBitCount[static_cast<std::size_t>(i)], std::bitset<8>(static_cast<unsigned>(i)).count());
+}
+
+// A snapshot of some blocks: the flagged ones hold the same records as the full snapshot's; a
+// left-out block of the grid is refused rather than read as empty; absent blocks stay nullptr.
+TEST(PackedVoxels, ASnapshotOfSomeBlocksRefusesTheOthers) {
+    std::mt19937 rng(10);
+    std::normal_distribution<double> g(0.0, 3.0);
+    VoxelGrid grid(0.2);
+    for (int i = 0; i < 20000; ++i) grid.insert(Eigen::Vector3d(g(rng), g(rng), 0.5 * g(rng)));
+    const std::size_t blocks = grid.index().block_count();
+    ASSERT_GT(blocks, 4u);
+    std::vector<std::uint8_t> only(blocks, 0);
+    for (std::size_t b = 0; b < blocks; b += 2) only[b] = 1;
+    const PackedVoxels full(grid), some(grid, &only);
+    for (std::size_t v = 0; v < grid.size(); ++v) {
+        const VoxelKey key = grid.keys()[v];
+        const VoxelKey block = BlockMap<std::int32_t>::block_of(key);
+        const auto b = static_cast<std::size_t>(grid.index().index_of(block));
+        if (!only[b]) {
+            EXPECT_THROW(some.find(block), InvalidArgument);
+            continue;
+        }
+        const int offset = BlockMap<std::int32_t>::offset_of(key);
+        const PackedVoxels::Voxel &r = some.find(block)->at(offset), &f = full.find(block)->at(offset);
+        ASSERT_EQ(std::memcmp(&r, &f, sizeof r), 0) << v;
+    }
+    EXPECT_EQ(some.find(VoxelKey(1000, 1000, 1000)), nullptr);
+    EXPECT_LT(some.memory_bytes(), full.memory_bytes());
+    std::vector<std::uint8_t> wrong(blocks + 1, 1);
+    EXPECT_THROW(PackedVoxels(grid, &wrong), InvalidArgument);
 }

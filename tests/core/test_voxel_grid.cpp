@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <limits>
 #include <random>
 #include <span>
@@ -147,4 +148,50 @@ TEST(VoxelGrid, BatchInsertOutOfRangeChangesNothing) {
     EXPECT_EQ(empty.insert(std::span<const Eigen::Vector3d>(none)), 1u);
     EXPECT_EQ(empty.size(), 0u);
     EXPECT_FALSE(empty.has_origin());
+}
+
+namespace {
+// The blocks of a set of points, computed directly: floor(floor((p - origin) / alpha) / 8).
+std::set<KeyTuple> blocks_of(const std::vector<Eigen::Vector3d>& pts, double alpha, const Eigen::Vector3d& origin) {
+    std::set<KeyTuple> out;
+    for (const auto& [key, members] : group(pts, alpha, origin)) {
+        auto [x, y, z] = key;
+        out.insert({x >> 3, y >> 3, z >> 3});
+    }
+    return out;
+}
+std::set<KeyTuple> touched(const VoxelGrid& grid) {
+    std::set<KeyTuple> out;
+    for (std::uint32_t b : grid.touched_blocks()) {
+        const VoxelKey k = grid.index().block_keys()[b];
+        EXPECT_TRUE(out.insert({k.x(), k.y(), k.z()}).second) << "block listed twice";
+    }
+    return out;
+}
+}  // namespace
+
+// The blocks that received points since the last clear, against the points' blocks computed
+// directly; after a clear, a point in the block the grid inserted last (its cached block) counts.
+TEST(VoxelGrid, TouchedBlocksAreTheBlocksOfThePointsSinceTheLastClear) {
+    std::mt19937 rng(12);
+    std::normal_distribution<double> g(0.0, 4.0);
+    std::vector<Eigen::Vector3d> a, b;
+    for (int i = 0; i < 5000; ++i) a.emplace_back(g(rng), g(rng), 0.3 * g(rng));
+    for (int i = 0; i < 300; ++i) b.emplace_back(20.0 + 0.5 * g(rng), g(rng), 0.3 * g(rng));
+    VoxelGrid grid(0.2);
+    grid.insert(std::span<const Eigen::Vector3d>(a));
+    EXPECT_EQ(touched(grid), blocks_of(a, 0.2, grid.origin()));
+    grid.clear_touched();
+    EXPECT_TRUE(grid.touched_blocks().empty());
+    grid.insert(std::span<const Eigen::Vector3d>(b));
+    const std::set<KeyTuple> tb = blocks_of(b, 0.2, grid.origin());
+    EXPECT_EQ(touched(grid), tb);
+    std::vector<Eigen::Vector3d> ab = a;  // a's blocks are touched again, b's stay touched
+    ab.insert(ab.end(), b.begin(), b.end());
+    grid.insert(std::span<const Eigen::Vector3d>(a));
+    EXPECT_EQ(touched(grid), blocks_of(ab, 0.2, grid.origin()));
+    grid.insert(b.back());
+    grid.clear_touched();
+    grid.insert(b.back());  // b.back()'s block is the one the grid cached from the insert before the clear
+    EXPECT_EQ(touched(grid), blocks_of({b.back()}, 0.2, grid.origin()));
 }

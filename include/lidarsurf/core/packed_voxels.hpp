@@ -43,19 +43,26 @@ public:
     };
 
     /// Snapshot of `grid` (which must outlive it and not change while it is used). Built in
-    /// parallel per block.
-    explicit PackedVoxels(const VoxelGrid& grid);
+    /// parallel per block. With `only`, a flag per grid block (creation order), only the flagged
+    /// blocks are copied: an incremental re-mesh needs those near the new points.
+    explicit PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t>* only = nullptr);
 
     const VoxelGrid& grid() const { return *grid_; }
-    /// The block with key `key`, or nullptr when it holds no voxel.
+    /// The block with key `key`, or nullptr when it holds no voxel. Throws InvalidArgument for a
+    /// block of the grid that was left out of the snapshot (it would read as empty).
     const Block* find(const VoxelKey& key) const {
         const std::int64_t b = grid_->index().index_of(key);
-        return b < 0 ? nullptr : &blocks_[static_cast<std::size_t>(b)];
+        if (b < 0) return nullptr;
+        const Block& block = blocks_[static_cast<std::size_t>(b)];
+        if (!block.occupancy) left_out(key);
+        return &block;
     }
     /// Bytes held by the snapshot.
     std::size_t memory_bytes() const { return voxels_.capacity() * sizeof(Voxel) + blocks_.capacity() * sizeof(Block); }
 
 private:
+    [[noreturn]] static void left_out(const VoxelKey& key);
+
     const VoxelGrid* grid_;
     std::vector<Voxel> voxels_;
     std::vector<Block> blocks_;  // in the grid's block creation order

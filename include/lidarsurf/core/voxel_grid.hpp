@@ -75,6 +75,12 @@ public:
     using Occupancy = std::array<std::uint64_t, 8>;
     const Occupancy& occupancy(std::size_t block) const { return occupancy_[block]; }
 
+    /// Creation indices of the index blocks that received a point since the grid was made or
+    /// since the last clear_touched(), each once, in the order they were first touched. What an
+    /// incremental re-mesh must redo (Reconstructor::extract_mesh).
+    const std::vector<std::uint32_t>& touched_blocks() const { return touched_; }
+    void clear_touched();
+
 private:
     void set_origin_from(const Eigen::Vector3d& world);
     /// Index of the voxel `key`, created if absent: its key is appended to keys_, and the caller
@@ -91,6 +97,8 @@ private:
     Occupancy* last_occupancy_ = nullptr;
     VoxelKey last_block_key_ = VoxelKey::Zero();
     std::vector<Occupancy> occupancy_;  // per index block, in creation order
+    std::vector<std::uint8_t> touched_flag_;  // per index block: in touched_
+    std::vector<std::uint32_t> touched_;
     std::vector<VoxelKey> keys_;
     std::vector<VoxelStats> stats_;
 };

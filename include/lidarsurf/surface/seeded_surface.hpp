@@ -29,6 +29,7 @@ struct SeededTsdf {
     TsdfField field;                ///< the defined vertices that were evaluated (a superset of the cubes' corners)
     std::vector<VoxelKey> cubes;    ///< as seeded_cubes(field, grid) on the full field
     std::size_t evaluated = 0;      ///< vertices evaluated
+    std::size_t reused = 0;         ///< vertices taken from `previous` instead (see compute_seeded_tsdf)
 };
 
 /// The fast path: the same cubes and the same values at their corners (up to rounding) as
@@ -36,7 +37,16 @@ struct SeededTsdf {
 /// visited cube's corners lazily: its two probes, then the rest), in parallel per search wave,
 /// through NeighbourhoodWindows. `field` is ordered by vertex block, then offset: the result does
 /// not depend on the thread count.
+///
+/// Incremental re-meshing: `previous`, when given, is the field of an earlier call on the same
+/// grid with the same config, sensor and solver, after which the grid's touched_blocks() were
+/// cleared. A vertex's value depends only on the voxels within config.max_reach() of it, so a
+/// vertex whose block is more than ceil(max_reach / 8) blocks from every touched block keeps the
+/// value (or the undefinedness) `previous` recorded for it, and is not evaluated again; only
+/// the voxel blocks the others can reach are packed. The result is the same as without
+/// `previous` (tests/test_pipeline.cpp). The search and the compaction still run over the
+/// whole surface.
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
-                               EigenSolver solver = EigenSolver::ClosedForm);
+                               EigenSolver solver = EigenSolver::ClosedForm, const TsdfField* previous = nullptr);
 
 }  // namespace lidarsurf

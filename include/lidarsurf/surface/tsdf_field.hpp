@@ -16,7 +16,7 @@ class TsdfField {
 public:
     TsdfField() = default;
     /// Adopts a field built elsewhere: `index` maps each vertex to its position in `keys` and
-    /// `samples` (negative = undefined); every sample must be defined.
+    /// `samples`, or to kUnevaluated / kUndefined; every sample must be defined.
     TsdfField(BlockMap<std::int32_t>&& index, std::vector<VoxelKey>&& keys, std::vector<VertexSample>&& samples,
               double voxel_size_, const Eigen::Vector3d& origin_)
         : voxel_size(voxel_size_), origin(origin_), index_(std::move(index)), keys_(std::move(keys)), samples_(std::move(samples)) {}
@@ -24,11 +24,23 @@ public:
     /// Sample at lattice vertex v, or nullptr if v is undefined.
     const VertexSample* find(const VoxelKey& v) const { return sample_at(index_.find(v)); }
 
+    /// What the field knows of v: whether it was evaluated, and its sample if it is defined. A
+    /// field of the fast path (compute_seeded_tsdf) records the vertices it evaluated and found
+    /// undefined (or beyond the truncation); other fields know only their defined vertices.
+    struct Known {
+        bool evaluated = false;
+        const VertexSample* sample = nullptr;
+    };
+    Known known(const VoxelKey& v) const { return known_at(index_.find(v)); }
+    /// Index values of a vertex with no sample: never evaluated, or evaluated and undefined.
+    static constexpr std::int32_t kUnevaluated = -1, kUndefined = -2;
+
     /// find() remembering the last block: for coherent sequences of lookups (one per thread).
     class Accessor {
     public:
         explicit Accessor(const TsdfField& field) : field_(field), index_(field.index_) {}
         const VertexSample* find(const VoxelKey& v) { return field_.sample_at(index_.find(v)); }
+        Known known(const VoxelKey& v) { return field_.known_at(index_.find(v)); }
 
     private:
         const TsdfField& field_;
@@ -37,6 +49,10 @@ public:
 
     void insert(const VoxelKey& v, const VertexSample& s);
     std::size_t size() const { return keys_.size(); }
+    /// Bytes held: the index blocks, the keys and the samples (capacities).
+    std::size_t memory_bytes() const {
+        return index_.memory_bytes() + keys_.capacity() * sizeof(VoxelKey) + samples_.capacity() * sizeof(VertexSample);
+    }
     const std::vector<VoxelKey>& keys() const { return keys_; }
     const std::vector<VertexSample>& samples() const { return samples_; }
 
@@ -44,12 +60,16 @@ public:
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< world position of vertex (0,0,0)
 
 private:
+    Known known_at(const std::int32_t* slot) const {
+        if (!slot || *slot == kUnevaluated) return {};
+        return {true, sample_at(slot)};
+    }
     // The sample an index slot points to; nullptr for an absent block or an undefined vertex.
     const VertexSample* sample_at(const std::int32_t* slot) const {
         return slot && *slot >= 0 ? &samples_[static_cast<std::size_t>(*slot)] : nullptr;
     }
 
-    BlockMap<std::int32_t> index_{-1};
+    BlockMap<std::int32_t> index_{kUnevaluated};
     std::vector<VoxelKey> keys_;
     std::vector<VertexSample> samples_;
 };
