@@ -48,4 +48,12 @@ struct BenchOptions {
 CLI::App* add_bench_command(CLI::App& app, BenchOptions& o);
 int run_bench(const BenchOptions& o);
 
+struct FuseOptions {
+    std::string dir, output, mesh_format = "auto";
+    int first = 0, frames = 0, step = 1, remesh_every = 0;
+    ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
+};
+CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);
+int run_fuse(const FuseOptions& o);
+
 }  // namespace lidarsurf::cli

@@ -177,6 +177,8 @@ int main(int argc, char** argv) {
     auto* bm = add_benchmark_command(app, bo);
     BenchOptions bno;
     auto* bn = add_bench_command(app, bno);
+    FuseOptions fo;
+    auto* fu = add_fuse_command(app, fo);
 
     try {
         app.parse(argc, argv);
@@ -191,6 +193,7 @@ int main(int argc, char** argv) {
         if (*rd) return run_render(rdo);
         if (*bm) return run_benchmark(bo);
         if (*bn) return run_bench(bno);
+        if (*fu) return run_fuse(fo);
     } catch (const Error& e) {
         std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
         return exit_code(e);

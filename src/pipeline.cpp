@@ -45,6 +45,19 @@ Reconstructor::Reconstructor(const ReconstructionConfig& config, const Eigen::Ve
 void Reconstructor::integrate(const PointCloud& cloud) { integrate(std::span<const Eigen::Vector3d>(cloud.points)); }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
+    add(points, grid_.has_viewpoints() ? std::optional<Eigen::Vector3d>(sensor_) : std::nullopt);
+}
+
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint) {
+    if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
+    if (!grid_.has_viewpoints()) {
+        grid_.enable_viewpoints(sensor_);  // the points integrated before were seen from the sensor
+        if (grid_.point_count() > 0) previous_.reset();  // every orientation may change: evaluate all again
+    }
+    add(points, viewpoint);
+}
+
+void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from) {
     const auto t0 = std::chrono::steady_clock::now();
     summary_.points_read += points.size();
     constexpr std::size_t kChunk = 1 << 16;  // the budget is checked between chunks
@@ -52,7 +65,7 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
         const std::size_t end = std::min(points.size(), begin + kChunk);
-        summary_.points_dropped += arena.execute([&] { return grid_.insert(points.subspan(begin, end - begin)); });
+        summary_.points_dropped += arena.execute([&] { return grid_.insert(points.subspan(begin, end - begin), seen_from); });
         const double used = static_cast<double>(grid_.memory_bytes());
         if (used > budget_bytes()) {
             // Extrapolate this call's growth to all of its points for the message.

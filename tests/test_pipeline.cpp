@@ -36,6 +36,8 @@ Errors vertex_errors(const Mesh& mesh, const sim::AnalyticScene& scene, const Ei
 }
 
 using test::demo_scan;
+using test::expect_identical;
+using test::expect_same_mesh;
 
 TEST(Pipeline, GroundBoxAndCylinderAreReconstructedAccurately) {
     // The issue's scene: a ground plane, a box and a cylinder, HDL-64E with 2 cm range noise.
@@ -139,15 +141,6 @@ TEST(Pipeline, TheMeshDoesNotDependOnTheThreadCount) {
     }
 }
 
-void expect_identical(const Mesh& m, const Mesh& expected, const std::string& what) {
-    ASSERT_EQ(m.vertices.size(), expected.vertices.size()) << what;
-    ASSERT_EQ(m.triangles.size(), expected.triangles.size()) << what;
-    for (std::size_t i = 0; i < m.vertices.size(); ++i) ASSERT_EQ(m.vertices[i], expected.vertices[i]) << what;
-    for (std::size_t i = 0; i < m.triangles.size(); ++i) ASSERT_EQ(m.triangles[i], expected.triangles[i]) << what;
-    EXPECT_EQ(m.normals, expected.normals) << what;
-    EXPECT_EQ(m.confidence, expected.confidence) << what;
-}
-
 // Incremental re-meshing (issue 5). A revolution integrated a quarter at a time (azimuth
 // sectors, as a spinning lidar delivers them), with an extraction after each quarter: each
 // extraction gives, bit for bit, the mesh of one extraction of all the quarters so far (a new
@@ -204,6 +197,71 @@ TEST(Pipeline, IncrementalExtractionGivesTheMeshOfOneExtraction) {
         once.integrate(so_far);
         expect_identical(again, once.extract_mesh(), name + ", again");
     }
+}
+
+// Sequences (viewpoints): a car-sized box between two sensor positions, each seeing its own side.
+// Fused with the position each scan was seen from, the far side's normals face the sensor that
+// saw it (Eq. 2 per vertex, toward the mean viewpoint of the points near it); fused as if both
+// were seen from the first position, they face into the box. Both fused meshes are compared with
+// the reference path, and the incremental extractions with a one-pass oracle.
+TEST(Pipeline, ASequenceOrientsEachSideTowardTheSensorThatSawIt) {
+    sim::AnalyticScene scene;
+    const double ground = -1.73;
+    scene.grounds.push_back({ground, 0, 0, 25, 25});
+    scene.boxes.push_back({{-2.0, -1.0, ground}, {2.0, 1.0, ground + 1.5}});
+    const std::array<Eigen::Vector3d, 3> from = {Eigen::Vector3d(-9, 0.3, 0), Eigen::Vector3d(9, -0.2, 0), Eigen::Vector3d(0.5, 8, 0)};
+    std::array<PointCloud, 3> scans;
+    for (std::size_t i = 0; i < scans.size(); ++i) scans[i] = sim::simulate_scan(scene, sim::SensorModel::hdl64(), from[i], i + 1);
+    // The far face x = +2 (seen from from[1] only), away from its edges.
+    auto far_face_normals = [](const Mesh& m, int& n, int& outward) {
+        n = outward = 0;
+        for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+            const Eigen::Vector3d& v = m.vertices[i];
+            if (std::fabs(v.x() - 2.0) > 0.1 || std::fabs(v.y()) > 0.6 || v.z() < -1.4 || v.z() > -0.6) continue;
+            ++n;
+            outward += m.normals[i].x() > 0.9f;
+        }
+    };
+    ReconstructionConfig config;
+    // Fused with viewpoints, scan by scan, a mesh after each.
+    Reconstructor fused(config, from[0]);
+    Mesh mesh;
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+        fused.integrate(scans[i].points, from[i]);
+        mesh = fused.extract_mesh();
+        Reconstructor once(config, from[0]);
+        for (std::size_t j = 0; j <= i; ++j) once.integrate(scans[j].points, from[j]);
+        expect_identical(mesh, once.extract_mesh(), "after scan " + std::to_string(i));
+        if (i > 0) {
+            EXPECT_GT(fused.summary().reused_vertices, 0u) << i;
+        }
+    }
+    EXPECT_TRUE(fused.grid().has_viewpoints());
+    int n = 0, outward = 0;
+    far_face_normals(mesh, n, outward);
+    ASSERT_GT(n, 20);
+    EXPECT_GT(outward, 0.9 * n) << outward << " of " << n;
+    EXPECT_LT(vertex_errors(mesh, scene, Eigen::Vector3d::Zero()).mean, 0.25 * config.voxel_size);
+    expect_same_mesh(fused.extract_mesh(Evaluation::Reference), mesh, "reference path, viewpoints");
+    // The same points as if seen from from[0]: the far face points into the box.
+    Reconstructor one_sensor(config, from[0]);
+    for (const PointCloud& scan : scans) one_sensor.integrate(scan);
+    EXPECT_FALSE(one_sensor.grid().has_viewpoints());
+    const Mesh wrong = one_sensor.extract_mesh();
+    int wn = 0, wout = 0;
+    far_face_normals(wrong, wn, wout);
+    EXPECT_LT(wout, 0.1 * std::max(wn, 1)) << wout << " of " << wn;
+    EXPECT_THROW(fused.integrate(scans[0].points, Eigen::Vector3d(std::nan(""), 0, 0)), InvalidArgument);
+    // Viewpoints turned on after points were integrated: those count as seen from the sensor,
+    // and the next extraction evaluates everything again.
+    Reconstructor late(config, from[0]);
+    late.integrate(scans[0]);
+    late.extract_mesh();
+    EXPECT_FALSE(late.grid().has_viewpoints());
+    late.integrate(scans[1].points, from[1]);
+    late.integrate(scans[2].points, from[2]);
+    expect_identical(late.extract_mesh(), mesh, "viewpoints turned on at the second scan");
+    EXPECT_EQ(late.summary().reused_vertices, 0u);
 }
 
 TEST(Pipeline, RealKittiFrameWhenAvailable) {

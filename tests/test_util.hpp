@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <unistd.h>
@@ -70,6 +72,24 @@ inline std::filesystem::path temp_dir(const std::string& name) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
+}
+
+/// The fast path against the reference (issue 5): the same triangles, vertices within 1e-6 m.
+inline void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
+    ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
+    ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
+    for (std::size_t i = 0; i < a.vertices.size(); ++i) ASSERT_LT((a.vertices[i] - b.vertices[i]).norm(), 1e-6) << what;
+    EXPECT_EQ(a.triangles, b.triangles) << what;
+}
+
+/// The same computation done another way (thread counts, incremental extractions): bit for bit.
+inline void expect_identical(const Mesh& m, const Mesh& expected, const std::string& what) {
+    ASSERT_EQ(m.vertices.size(), expected.vertices.size()) << what;
+    ASSERT_EQ(m.triangles.size(), expected.triangles.size()) << what;
+    for (std::size_t i = 0; i < m.vertices.size(); ++i) ASSERT_EQ(m.vertices[i], expected.vertices[i]) << what;
+    for (std::size_t i = 0; i < m.triangles.size(); ++i) ASSERT_EQ(m.triangles[i], expected.triangles[i]) << what;
+    EXPECT_EQ(m.normals, expected.normals) << what;
+    EXPECT_EQ(m.confidence, expected.confidence) << what;
 }
 
 }  // namespace lidarsurf::test

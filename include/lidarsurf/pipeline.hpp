@@ -49,6 +49,13 @@ public:
     void integrate(const PointCloud& cloud);
     /// The same on a view (no copy): used by the Python bindings on numpy arrays.
     void integrate(std::span<const Eigen::Vector3d> points);
+    /// Points seen from `viewpoint` (same frame as the points, e.g. a sequence's world frame with
+    /// the pose's translation). The first call turns on per-voxel viewpoints for good: each
+    /// vertex's normal is then oriented toward the mean viewpoint of the points near it
+    /// (vertex_viewpoint, docs/method.md "Sequences"); points integrated without a viewpoint count
+    /// as seen from the constructor's sensor. Turning them on after points were integrated makes
+    /// the next extraction evaluate every vertex again. Throws InvalidArgument if not finite.
+    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
 
     /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated and
     /// ResourceLimit if the grid plus estimate_extraction_bytes exceeds config.max_memory_mb.
@@ -65,6 +72,7 @@ public:
     const ReconstructionConfig& config() const { return config_; }
 
 private:
+    void add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from);
     double budget_bytes() const;
     std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;
 

@@ -251,6 +251,18 @@ PYBIND11_MODULE(_lidarsurf, m) {
             "Add an (N, 3) float32/float64 array of points to the voxel statistics; non-finite points are counted as dropped. "
             "Raises MemoryError past the memory budget.")
         .def(
+            "integrate_from",
+            [](Reconstructor& rec, const py::handle& points, const std::vector<double>& viewpoint) {
+                const PointArray view = points_view(points, "points");
+                const Eigen::Vector3d seen_from = as_vec3(viewpoint, "viewpoint");
+                py::gil_scoped_release release;
+                rec.integrate(as_span(view), seen_from);
+            },
+            py::arg("points"), py::arg("viewpoint"),
+            "Add points seen from `viewpoint` (same frame, e.g. world points and the pose's translation): for sequences. "
+            "The first call turns on per-voxel viewpoints, so each part of the surface is oriented toward where it was "
+            "seen from; points added by integrate() count as seen from the origin.")
+        .def(
             "extract_mesh",
             [](Reconstructor& rec) {
                 py::gil_scoped_release release;

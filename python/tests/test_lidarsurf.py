@@ -197,3 +197,22 @@ def test_reconstructor_meshes_incrementally_with_the_mesh_of_one_extraction(scan
         lidarsurf.Reconstructor().extract_mesh()
     with pytest.raises(ValueError):
         lidarsurf.Reconstructor(config=lidarsurf.Config.paper("an"), origin=(0, 0))
+
+
+def test_reconstructor_fuses_scans_seen_from_several_positions(scan):
+    # The scan, then the same scan moved 200 m along x and integrated with its moved viewpoint
+    # (beyond the first one's reach): the first copy's part of the fused mesh is the first mesh,
+    # its vertices were all reused, and the second copy is about as large.
+    shift = np.array([200.0, 0.0, 0.0])
+    rec = lidarsurf.Reconstructor()
+    rec.integrate_from(scan, (0, 0, 0))
+    one = rec.extract_mesh()
+    evaluated_first = rec.summary["vertices_evaluated"]
+    rec.integrate_from(scan + shift, shift)
+    both = rec.extract_mesh()
+    assert rec.summary["vertices_reused"] >= evaluated_first
+    near = both.vertices[both.vertices[:, 0] < 100.0]
+    np.testing.assert_array_equal(np.unique(near, axis=0), np.unique(one.vertices, axis=0))
+    assert abs(len(both.vertices) - 2 * len(one.vertices)) < 0.02 * len(one.vertices)
+    with pytest.raises(ValueError, match="viewpoint"):
+        rec.integrate_from(scan, (0, 0))

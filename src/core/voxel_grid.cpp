@@ -1,10 +1,13 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <sstream>
 
 #include <tbb/parallel_for.h>
 
+#include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
@@ -71,6 +74,7 @@ std::int32_t VoxelGrid::voxel_index(const VoxelKey& key) {
 
 void VoxelGrid::insert(const Eigen::Vector3d& world) {
     if (!world.allFinite()) throw InvalidInput("point coordinates must be finite");
+    if (viewpoints_enabled_) throw InvalidArgument("this grid has viewpoints: insert points with the position they were seen from");
     set_origin_from(world);
     const Eigen::Vector3d local = world - origin_;
     const auto v = static_cast<std::size_t>(voxel_index(key_of_local(local)));
@@ -79,7 +83,9 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     ++points_;
 }
 
-std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points) {
+std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint) {
+    if (viewpoints_enabled_ && !viewpoint) throw InvalidArgument("this grid has viewpoints: insert points with the position they were seen from");
+    if (viewpoint && !viewpoint->allFinite()) throw InvalidArgument("viewpoint must be finite");
     const std::size_t n = points.size();
     std::size_t first = 0;
     while (first < n && !points[first].allFinite()) ++first;
@@ -123,8 +129,52 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points) {
         for (std::size_t v = r.begin(); v != r.end(); ++v)
             for (std::uint32_t j = start[v]; j < start[v + 1]; ++j) stats_[v].add(points[order[j]] - origin_);
     });
+    if (viewpoints_enabled_) {
+        viewpoint_sums_.resize(stats_.size(), Eigen::Vector3d::Zero());
+        const Eigen::Vector3d local = *viewpoint - origin_;
+        for (std::size_t v = 0; v < stats_.size(); ++v)
+            if (start[v + 1] > start[v]) viewpoint_sums_[v] += static_cast<double>(start[v + 1] - start[v]) * local;
+    }
     points_ += n - dropped;
     return dropped;
+}
+
+void VoxelGrid::enable_viewpoints(const Eigen::Vector3d& earlier) {
+    if (!earlier.allFinite()) throw InvalidArgument("viewpoint must be finite");
+    if (viewpoints_enabled_) return;
+    viewpoints_enabled_ = true;
+    viewpoint_sums_.resize(stats_.size());
+    const Eigen::Vector3d local = earlier - origin_;
+    for (std::size_t v = 0; v < stats_.size(); ++v) viewpoint_sums_[v] = static_cast<double>(stats_[v].count) * local;
+}
+
+std::optional<Eigen::Vector3d> VoxelGrid::mean_viewpoint(const VoxelKey& lo, const VoxelKey& hi) const {
+    if (!viewpoints_enabled_) throw InvalidArgument("mean_viewpoint: the grid has no viewpoints");
+    using Map = BlockMap<std::int32_t>;
+    constexpr int B = Map::kSize, m = B - 1;
+    const VoxelKey blo = Map::block_of(lo), bhi = Map::block_of(hi);
+    double count = 0;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int bz = blo.z(); bz <= bhi.z(); ++bz)
+        for (int by = blo.y(); by <= bhi.y(); ++by)
+            for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
+                const std::int64_t b = index_.index_of({bx, by, bz});
+                if (b < 0) continue;
+                const Map::Block& block = index_.block_at(static_cast<std::size_t>(b));
+                const Occupancy& occupied = occupancy_[static_cast<std::size_t>(b)];
+                const int x0 = std::max(lo.x(), bx * B), x1 = std::min(hi.x(), bx * B + m);
+                const int y0 = std::max(lo.y(), by * B), y1 = std::min(hi.y(), by * B + m);
+                const int z0 = std::max(lo.z(), bz * B), z1 = std::min(hi.z(), bz * B + m);
+                const std::uint64_t mask = layer_mask(x0 & m, x1 & m, y0 & m, y1 & m);
+                for (int z = z0; z <= z1; ++z)
+                    for (std::uint64_t bits = occupied[static_cast<std::size_t>(z & m)] & mask; bits; bits &= bits - 1) {
+                        const auto v = static_cast<std::size_t>(block[static_cast<std::size_t>(std::countr_zero(bits) | ((z & m) << 6))]);
+                        count += static_cast<double>(stats_[v].count);
+                        sum += viewpoint_sums_[v];
+                    }
+            }
+    if (count <= 0) return std::nullopt;
+    return sum / count;
 }
 
 void VoxelGrid::clear_touched() {
@@ -135,7 +185,8 @@ void VoxelGrid::clear_touched() {
 
 std::size_t VoxelGrid::memory_bytes() const {
     return index_.memory_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
-           keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t);
+           keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t) +
+           viewpoint_sums_.capacity() * sizeof(Eigen::Vector3d);
 }
 
 const VoxelStats* VoxelGrid::find(const VoxelKey& key) const {

@@ -20,7 +20,7 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
 }
 
 NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level)
-    : alpha_(voxels.grid().voxel_size()) {
+    : grid_(&voxels.grid()), alpha_(voxels.grid().voxel_size()) {
     using Map = BlockMap<std::int32_t>;
     // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
     // radius ceil(k/8) blocks of b.

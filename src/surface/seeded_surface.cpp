@@ -309,7 +309,9 @@ private:
 
 // The blocks an incremental re-mesh must redo (compute_seeded_tsdf's `previous`): the vertex
 // blocks within `reach` blocks of a touched voxel block (their windows can see a new point),
-// and, as flags per grid block, the voxel blocks within 2 `reach` (what those windows read).
+// and, as flags per grid block, the voxel blocks within 2 `reach` (what those windows read: they
+// are packed up front; a clean vertex block that `previous` had not evaluated packs what its
+// window needs when it is built).
 struct DirtyRegion {
     BlockIndex vertex_blocks;
     std::vector<std::uint8_t> packed_blocks;

@@ -98,8 +98,16 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
     return make_sample(*plane, position, level, confidence);
 }
 
+Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+                                 const Eigen::Vector3d& sensor_local) {
+    if (!grid.has_viewpoints()) return sensor_local;
+    const int level = config.max_level();  // H^level(v) = [v - level, v + level - 1]
+    return grid.mean_viewpoint(v.array() - level, v.array() + (level - 1)).value_or(sensor_local);
+}
+
 VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
-                             const Eigen::Vector3d& sensor_local) {
+                             const Eigen::Vector3d& sensor) {
+    const Eigen::Vector3d sensor_local = vertex_viewpoint(grid, v, config, sensor);
     VoxelStats acc, slab;
     auto stats_of = [&](int level) -> const VoxelStats& {
         if (config.adaptive())
@@ -117,7 +125,8 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
 }
 
 VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
-                             const Eigen::Vector3d& sensor_local, EigenSolver solver) {
+                             const Eigen::Vector3d& sensor, EigenSolver solver) {
+    const Eigen::Vector3d sensor_local = vertex_viewpoint(window.grid(), v, config, sensor);
     const Eigen::Vector3d position = v.cast<double>() * window.voxel_size();
     auto stats = [&](const Moments& m) {
         if (m.n < config.n_min) {  // Eq. (1) fails: only the count is read

@@ -41,6 +41,20 @@ for f in velodyne/000000.bin velodyne/000001.bin gt/000000.bin gt/000001.bin obj
 done
 [ "$(wc -l < "$seq/poses.txt")" -eq 2 ] || { echo "FAIL: poses.txt should have 2 lines"; fail=$((fail + 1)); }
 [ "$(wc -w < "$seq/poses.txt")" -eq 24 ] || { echo "FAIL: poses.txt should hold 2 x 12 numbers"; fail=$((fail + 1)); }
+# Fusing the sequence with its poses: a mesh after each frame (the second reusing the first's
+# vertices), the world-frame mesh written; bad poses, ranges and methods refused.
+expect 0 "frame 000001: .*reused [1-9]" -- "$cli" fuse "$seq" -o "$dir/fused.ply" --remesh-every 1
+[ -s "$dir/fused.ply" ] || { echo "FAIL: fuse wrote no mesh"; fail=$((fail + 1)); }
+expect 0 "1 frames fused" -- "$cli" fuse "$seq" -o "$dir/fused1.obj" --first 1 --frames 1
+expect 2 "first 5: the sequence has 2 scans" -- "$cli" fuse "$seq" -o "$dir/x.ply" --first 5
+expect 2 "step" -- "$cli" fuse "$seq" -o "$dir/x.ply" --step 0
+expect 2 "IMLS" -- "$cli" fuse "$seq" -o "$dir/x.ply" --method imls
+expect 4 "velodyne|cannot|no such" -- "$cli" fuse "$dir/nothere" -o "$dir/x.ply"
+mkdir -p "$dir/short/velodyne" && cp "$seq"/velodyne/*.bin "$dir/short/velodyne/" && head -1 "$seq/poses.txt" > "$dir/short/poses.txt"
+expect 3 "1 poses for 2 scans" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
+rm "$dir/short/poses.txt"
+expect 4 "no poses file" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
+[ ! -e "$dir/x.ply" ] || { echo "FAIL: a failed fuse left a mesh"; fail=$((fail + 1)); }
 # Three rows keep this quick under the sanitizers (every row is listed by Benchmark.TableOneRows).
 expect 0 "against the true scene triangles" -- "$cli" benchmark "$seq" --frames 1 --no-plots --methods 'default,AN+GC kmax=5,IMLS'
 [ "$(wc -l < "$seq/benchmark/results.csv")" -eq 4 ] || { echo "FAIL: results.csv should have a header and 3 rows"; fail=$((fail + 1)); }

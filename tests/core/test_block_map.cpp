@@ -4,6 +4,7 @@
 
 #include <bitset>
 #include <cstring>
+#include <thread>
 #include <map>
 #include <random>
 #include <tuple>
@@ -118,32 +119,36 @@ TEST(PackedVoxels, EveryVoxelIsFoundByRankWithItsStatistics) {
     for (int i = 0; i < 256; ++i) EXPECT_EQ(PackedVoxels::kBitCount[static_cast<std::size_t>(i)], std::bitset<8>(static_cast<unsigned>(i)).count());
 }
 
-// A snapshot of some blocks: the flagged ones hold the same records as the full snapshot's; a
-// left-out block of the grid is refused rather than read as empty; absent blocks stay nullptr.
-TEST(PackedVoxels, ASnapshotOfSomeBlocksRefusesTheOthers) {
+// A snapshot with some blocks packed up front: the others are packed when first found, with
+// the same records as the full snapshot's, also when two threads find them at once; absent
+// blocks stay nullptr.
+TEST(PackedVoxels, BlocksLeftForLaterArePackedWhenFirstFound) {
     std::mt19937 rng(10);
     std::normal_distribution<double> g(0.0, 3.0);
     VoxelGrid grid(0.2);
     for (int i = 0; i < 20000; ++i) grid.insert(Eigen::Vector3d(g(rng), g(rng), 0.5 * g(rng)));
     const std::size_t blocks = grid.index().block_count();
     ASSERT_GT(blocks, 4u);
-    std::vector<std::uint8_t> only(blocks, 0);
-    for (std::size_t b = 0; b < blocks; b += 2) only[b] = 1;
-    const PackedVoxels full(grid), some(grid, &only);
-    for (std::size_t v = 0; v < grid.size(); ++v) {
-        const VoxelKey key = grid.keys()[v];
-        const VoxelKey block = BlockMap<std::int32_t>::block_of(key);
-        const auto b = static_cast<std::size_t>(grid.index().index_of(block));
-        if (!only[b]) {
-            EXPECT_THROW(some.find(block), InvalidArgument);
-            continue;
+    std::vector<std::uint8_t> eager(blocks, 0);
+    std::size_t eager_count = 0;
+    for (std::size_t b = 0; b < blocks; b += 2, ++eager_count) eager[b] = 1;
+    const PackedVoxels full(grid), some(grid, &eager);
+    EXPECT_EQ(full.packed_blocks(), blocks);
+    EXPECT_EQ(some.packed_blocks(), eager_count);
+    auto check = [&] {
+        for (std::size_t v = 0; v < grid.size(); ++v) {
+            const VoxelKey key = grid.keys()[v];
+            const VoxelKey block = BlockMap<std::int32_t>::block_of(key);
+            const int offset = BlockMap<std::int32_t>::offset_of(key);
+            const PackedVoxels::Voxel &r = some.find(block)->at(offset), &f = full.find(block)->at(offset);
+            ASSERT_EQ(std::memcmp(&r, &f, sizeof r), 0) << v;
         }
-        const int offset = BlockMap<std::int32_t>::offset_of(key);
-        const PackedVoxels::Voxel &r = some.find(block)->at(offset), &f = full.find(block)->at(offset);
-        ASSERT_EQ(std::memcmp(&r, &f, sizeof r), 0) << v;
-    }
+    };
+    std::thread other(check);
+    check();
+    other.join();
+    EXPECT_EQ(some.packed_blocks(), blocks);
     EXPECT_EQ(some.find(VoxelKey(1000, 1000, 1000)), nullptr);
-    EXPECT_LT(some.memory_bytes(), full.memory_bytes());
     std::vector<std::uint8_t> wrong(blocks + 1, 1);
     EXPECT_THROW(PackedVoxels(grid, &wrong), InvalidArgument);
 }

@@ -195,3 +195,47 @@ TEST(VoxelGrid, TouchedBlocksAreTheBlocksOfThePointsSinceTheLastClear) {
     grid.insert(b.back());  // b.back()'s block is the one the grid cached from the insert before the clear
     EXPECT_EQ(touched(grid), blocks_of({b.back()}, 0.2, grid.origin()));
 }
+
+// Viewpoints against a direct computation: the mean sensor position of the points in a box,
+// each point counted with the position it was inserted from (the points before
+// enable_viewpoints with the position given there).
+TEST(VoxelGrid, MeanViewpointIsThePointWeightedMeanOfTheSensorPositions) {
+    std::mt19937 rng(13);
+    std::normal_distribution<double> g(0.0, 2.0);
+    const std::vector<Eigen::Vector3d> from = {{0, 0, 1.7}, {5, -3, 1.7}, {-8, 4, 2.0}};
+    std::vector<std::vector<Eigen::Vector3d>> batches(3);
+    for (auto& b : batches)
+        for (int i = 0; i < 4000; ++i) b.emplace_back(g(rng), g(rng), 0.3 * g(rng));
+    VoxelGrid grid(0.2);
+    grid.insert(std::span<const Eigen::Vector3d>(batches[0]));
+    EXPECT_THROW(grid.mean_viewpoint(VoxelKey(-5, -5, -5), VoxelKey(5, 5, 5)), InvalidArgument);
+    EXPECT_THROW(grid.enable_viewpoints(Eigen::Vector3d(std::nan(""), 0, 0)), InvalidArgument);
+    grid.enable_viewpoints(from[0]);
+    EXPECT_TRUE(grid.has_viewpoints());
+    EXPECT_THROW(grid.insert(std::span<const Eigen::Vector3d>(batches[1])), InvalidArgument);  // no viewpoint
+    EXPECT_THROW(grid.insert(batches[1][0]), InvalidArgument);
+    grid.insert(std::span<const Eigen::Vector3d>(batches[1]), from[1]);
+    grid.insert(std::span<const Eigen::Vector3d>(batches[2]), from[2]);
+    const Eigen::Vector3d origin = grid.origin();
+    for (const auto& [lo, hi] : std::vector<std::pair<VoxelKey, VoxelKey>>{
+             {{-5, -5, -5}, {4, 4, 4}}, {{-13, 2, -1}, {-3, 17, 0}}, {{3, 3, -2}, {3, 3, -2}}, {{-100, -100, -100}, {100, 100, 100}}}) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        double count = 0;
+        for (std::size_t b = 0; b < batches.size(); ++b)
+            for (const auto& p : batches[b]) {
+                const Eigen::Vector3d l = (p - origin) / 0.2;
+                const VoxelKey k(int(std::floor(l.x())), int(std::floor(l.y())), int(std::floor(l.z())));
+                if ((k.array() < lo.array()).any() || (k.array() > hi.array()).any()) continue;
+                sum += from[b] - origin;
+                ++count;
+            }
+        const std::optional<Eigen::Vector3d> mean = grid.mean_viewpoint(lo, hi);
+        if (count == 0) {
+            EXPECT_FALSE(mean.has_value());
+            continue;
+        }
+        ASSERT_TRUE(mean.has_value());
+        EXPECT_LT((*mean - sum / count).norm(), 1e-9) << lo.transpose() << " " << hi.transpose();
+    }
+    EXPECT_FALSE(grid.mean_viewpoint(VoxelKey(500, 500, 500), VoxelKey(510, 510, 510)).has_value());
+}

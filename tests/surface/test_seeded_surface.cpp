@@ -18,6 +18,7 @@
 #include "lidarsurf/sim/simulator.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
+#include "test_util.hpp"
 
 using namespace lidarsurf;
 
@@ -35,12 +36,7 @@ void add_slab(TsdfField& f, int lo, int hi, double plane) {
             }
 }
 
-void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
-    ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
-    ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
-    for (std::size_t i = 0; i < a.vertices.size(); ++i) ASSERT_LT((a.vertices[i] - b.vertices[i]).norm(), 1e-6) << what;
-    EXPECT_EQ(a.triangles, b.triangles) << what;
-}
+using lidarsurf::test::expect_same_mesh;
 
 // A rough terrain: terraces at different heights, rocks (boxes) and trees (cylinders).
 sim::AnalyticScene offroad() {

@@ -6,7 +6,9 @@
 // an index load and a 104-byte VoxelStats scattered in insertion order (the two cache misses
 // that dominated the sums).
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lidarsurf/core/voxel_grid.hpp"
@@ -42,30 +44,39 @@ public:
         }
     };
 
-    /// Snapshot of `grid` (which must outlive it and not change while it is used). Built in
-    /// parallel per block. With `only`, a flag per grid block (creation order), only the flagged
-    /// blocks are copied: an incremental re-mesh needs those near the new points.
-    explicit PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t>* only = nullptr);
+    /// Snapshot of `grid` (which must outlive it and not change while it is used). Without
+    /// `eager`, every block is copied here, in parallel. With `eager` (a flag per grid block, in
+    /// creation order) only the flagged blocks are; the others are copied when find() first
+    /// meets them, by the thread that does (others needing it meanwhile wait). An incremental
+    /// re-mesh packs the blocks near the new points up front and the few others it reads lazily.
+    explicit PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t>* eager = nullptr);
 
     const VoxelGrid& grid() const { return *grid_; }
-    /// The block with key `key`, or nullptr when it holds no voxel. Throws InvalidArgument for a
-    /// block of the grid that was left out of the snapshot (it would read as empty).
+    /// The block with key `key`, or nullptr when it holds no voxel. Thread-safe.
     const Block* find(const VoxelKey& key) const {
         const std::int64_t b = grid_->index().index_of(key);
         if (b < 0) return nullptr;
-        const Block& block = blocks_[static_cast<std::size_t>(b)];
-        if (!block.occupancy) left_out(key);
-        return &block;
+        const auto i = static_cast<std::size_t>(b);
+        if (state_[i].load(std::memory_order_acquire) != kPacked) pack_now(i);
+        return &blocks_[i];
     }
-    /// Bytes held by the snapshot.
-    std::size_t memory_bytes() const { return voxels_.capacity() * sizeof(Voxel) + blocks_.capacity() * sizeof(Block); }
+    /// Blocks copied so far.
+    std::size_t packed_blocks() const;
+    /// Bytes held by the snapshot (records reserved for every block; pages of unpacked ones are
+    /// not touched).
+    std::size_t memory_bytes() const { return voxel_count_ * sizeof(Voxel) + blocks_.capacity() * (sizeof(Block) + 1); }
 
 private:
-    [[noreturn]] static void left_out(const VoxelKey& key);
+    static constexpr std::uint8_t kUnpacked = 0, kBusy = 1, kPacked = 2;
+    void pack(std::size_t b) const;      // copies block b's records and builds its ranks
+    void pack_now(std::size_t b) const;  // packs block b, or waits for the thread packing it
 
     const VoxelGrid* grid_;
-    std::vector<Voxel> voxels_;
-    std::vector<Block> blocks_;  // in the grid's block creation order
+    std::size_t voxel_count_ = 0;
+    std::unique_ptr<Voxel[]> voxels_;  // uninitialised: a block's records are written when it is packed
+    std::vector<std::size_t> start_;   // first record of each block
+    mutable std::vector<Block> blocks_;  // in the grid's block creation order
+    std::unique_ptr<std::atomic<std::uint8_t>[]> state_;
 };
 
 }  // namespace lidarsurf

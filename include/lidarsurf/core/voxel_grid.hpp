@@ -39,7 +39,18 @@ public:
     /// same grid, to the last bit, as inserting them one by one, built in parallel (keys, then the
     /// points of each voxel). Throws InvalidInput before changing the grid if a point falls
     /// outside the index range. Returns the number of non-finite points skipped.
-    std::size_t insert(std::span<const Eigen::Vector3d> points);
+    /// `viewpoint` (world) is where the points were seen from: required once viewpoints are
+    /// enabled (InvalidArgument otherwise), ignored before.
+    std::size_t insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint = std::nullopt);
+
+    /// Viewpoints (sequences seen from several sensor positions): from now on each voxel also
+    /// sums the sensor position of each of its points. The points already inserted are taken as
+    /// seen from `earlier` (world). Throws InvalidArgument if `earlier` is not finite.
+    void enable_viewpoints(const Eigen::Vector3d& earlier);
+    bool has_viewpoints() const { return viewpoints_enabled_; }
+    /// The point-weighted mean sensor position (local frame) of the occupied voxels with
+    /// lo <= key <= hi, or nullopt when the box holds no point. Requires viewpoints.
+    std::optional<Eigen::Vector3d> mean_viewpoint(const VoxelKey& lo, const VoxelKey& hi) const;
 
     /// Index of the voxel containing a local-frame point.
     VoxelKey key_of_local(const Eigen::Vector3d& local_point) const;
@@ -101,6 +112,8 @@ private:
     std::vector<std::uint32_t> touched_;
     std::vector<VoxelKey> keys_;
     std::vector<VoxelStats> stats_;
+    bool viewpoints_enabled_ = false;
+    std::vector<Eigen::Vector3d> viewpoint_sums_;  // per voxel when enabled: sum of its points' sensor positions (local)
 };
 
 template <typename F>

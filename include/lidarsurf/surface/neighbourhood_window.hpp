@@ -48,6 +48,7 @@ public:
     void grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e = {}) const;
 
     double voxel_size() const { return alpha_; }
+    const VoxelGrid& grid() const { return *grid_; }
 
 private:
     // Adds the voxels of the box lo <= key <= hi (inclusive) to acc, without its interior box
@@ -56,6 +57,7 @@ private:
     // 8x8 layer.
     void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc, bool caps = true) const;
 
+    const VoxelGrid* grid_;
     double alpha_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1

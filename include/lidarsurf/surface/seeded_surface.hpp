@@ -42,8 +42,8 @@ struct SeededTsdf {
 /// grid with the same config, sensor and solver, after which the grid's touched_blocks() were
 /// cleared. A vertex's value depends only on the voxels within config.max_reach() of it, so a
 /// vertex whose block is more than ceil(max_reach / 8) blocks from every touched block keeps the
-/// value (or the undefinedness) `previous` recorded for it, and is not evaluated again; only
-/// the voxel blocks the others can reach are packed. The result is the same as without
+/// value (or the undefinedness) `previous` recorded for it, and is not evaluated again; the
+/// voxel blocks the others can reach are packed up front, any other lazily. The result is the same as without
 /// `previous` (tests/test_pipeline.cpp). The search and the compaction still run over the
 /// whole surface.
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,

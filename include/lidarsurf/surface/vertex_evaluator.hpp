@@ -20,6 +20,13 @@ struct VertexSample {
     Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< n^{k'}.
 };
 
+/// The position v's normal is oriented toward (Eq. 2) and its radial slabs are measured from:
+/// `sensor_local` (the sensor, local frame), or on a grid with viewpoints (several sensor
+/// positions) the point-weighted mean viewpoint of H^{max_level}(v), `sensor_local` when that box
+/// is empty. Both evaluations below start with it (docs/method.md, "Sequences").
+Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+                                 const Eigen::Vector3d& sensor_local);
+
 /// Evaluates vertex `v` of `grid` with `config` (already validated). `sensor_local` is the sensor
 /// position in the grid's local frame. The reference: Chan merges over the grid, iterative eigen
 /// solver.

@@ -1,0 +1,91 @@
+// lidarsurf fuse: a sequence in the KITTI odometry layout (velodyne/NNNNNN.bin and poses.txt, as
+// `lidarsurf simulate` writes it) fused into one mesh in the world frame. Each scan is moved by its
+// pose and integrated with the position it was seen from, so each part of the surface is oriented
+// toward the sensor positions that saw it (docs/method.md, "Sequences"); with --remesh-every the
+// mesh is extracted along the way, each extraction redoing only what the new scans reach.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.hpp"
+#include "lidarsurf/io/kitti_sequence.hpp"
+#include "lidarsurf/io/mesh_writer.hpp"
+
+namespace fs = std::filesystem;
+
+namespace lidarsurf::cli {
+
+CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
+    CLI::App* f = app.add_subcommand("fuse", "Fuse a sequence of scans with poses (KITTI odometry layout) into one mesh");
+    f->add_option("dir", o.dir, "Sequence directory: velodyne/000000.bin, ... and poses.txt (one sensor-to-world 3x4 pose a line)")
+        ->required();
+    f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();
+    f->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj")->capture_default_str();
+    f->add_option("--first", o.first, "First frame")->capture_default_str();
+    f->add_option("--frames", o.frames, "Frames to fuse (0 = to the last)")->capture_default_str();
+    f->add_option("--step", o.step, "Use every step-th frame")->capture_default_str();
+    f->add_option("--remesh-every", o.remesh_every,
+                  "Also extract the mesh after every this many fused frames, printing its time (0 = only at the end)")
+        ->capture_default_str();
+    add_reconstruct_options(f, o.reconstruct);
+    f->footer("--origin is the sensor's position in the scan frame (0,0,0 for KITTI's velodyne frame).\n"
+              "Poses map the scan frame to the world (KITTI's published poses are the left camera's: convert\n"
+              "them with the calibration's Tr first).\n\n"
+              "Example:\n  lidarsurf simulate --frames 20 -o town && lidarsurf fuse town -o town.ply --remesh-every 1");
+    return f;
+}
+
+int run_fuse(const FuseOptions& o) {
+    if (o.first < 0 || o.frames < 0 || o.step < 1 || o.remesh_every < 0)
+        throw InvalidArgument("--first and --frames must be >= 0, --step >= 1, --remesh-every >= 0");
+    const Method m = resolve_method(o.reconstruct);
+    if (m.imls) throw InvalidArgument("fuse: the method must be paper (IMLS meshes one scan)");
+    const MeshFormat format = parse_mesh_format(o.mesh_format);
+    const KittiSequence seq{o.dir};
+    const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
+    if (!fs::exists(seq.poses())) throw IoError(seq.poses().string() + ": no poses file (one sensor-to-world pose per scan)");
+    const std::vector<Eigen::Isometry3d> poses = read_poses(seq.poses());
+    if (poses.size() < available)
+        throw InvalidInput(seq.poses().string() + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(available) + " scans");
+    const auto first = static_cast<std::size_t>(o.first);
+    if (first >= available)
+        throw InvalidArgument("--first " + std::to_string(first) + ": the sequence has " + std::to_string(available) + " scans");
+    std::vector<std::size_t> frames;
+    for (std::size_t i = first; i < available && (o.frames == 0 || frames.size() < static_cast<std::size_t>(o.frames));
+         i += static_cast<std::size_t>(o.step))
+        frames.push_back(i);
+    check_output(seq.poses(), o.output);
+
+    Reconstructor rec(m.config, poses[frames.front()] * m.sensor);
+    Mesh mesh;
+    double read_ms = 0;
+    bool fresh = false;  // whether `mesh` holds every frame fused so far
+    for (std::size_t n = 0; n < frames.size(); ++n) {
+        const std::size_t i = frames[n];
+        auto t0 = std::chrono::steady_clock::now();
+        PointCloud cloud = read_points(seq.scan(i), m.read);
+        const Eigen::Isometry3d& pose = poses[i];
+        for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN: integrate drops it
+        read_ms += ms_since(t0);
+        rec.integrate(cloud.points, pose * m.sensor);
+        fresh = false;
+        if (o.remesh_every > 0 && ((n + 1) % static_cast<std::size_t>(o.remesh_every) == 0 || n + 1 == frames.size())) {
+            mesh = rec.extract_mesh();
+            fresh = true;
+            const ReconstructionSummary& s = rec.summary();
+            std::printf("frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
+                        KittiSequence::frame_name(i).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles,
+                        1e3 * s.seconds_tsdf, 1e3 * s.seconds_mesh);
+            std::fflush(stdout);
+        }
+    }
+    if (!fresh) mesh = rec.extract_mesh();
+    if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
+    const auto t0 = std::chrono::steady_clock::now();
+    write_mesh(mesh, o.output, format);
+    std::printf("%s: %zu frames fused (%s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
+                method_name(m).c_str(), rec.summary().to_string().c_str(), read_ms, ms_since(t0), o.output.c_str());
+    return 0;
+}
+
+}  // namespace lidarsurf::cli
