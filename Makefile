@@ -44,7 +44,7 @@ sanitize: setup
 # against Debian's oneTBB source rebuilt with TSan (scripts/build_tbb_tsan.sh: Debian's libtbb is
 # not instrumented, and TSan would report every hand-off between its threads as a race).
 # The four slowest (the same parallel code on more data, 290 s under TSan) are left out.
-TSAN_FILTER ?= SeededSurface.*:Pipeline.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:VoxelGrid.BatchInsert*$\
+TSAN_FILTER ?= SeededSurface.*:Pipeline.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo
 tsan:
 	@bash scripts/setup.sh tsan

@@ -34,6 +34,8 @@ void PackedVoxels::pack(std::size_t b) const {
     Block& block = blocks_[b];
     block.voxels = voxels_.get() + start_[b];
     block.occupancy = &grid.occupancy(b);
+    block.layers = 0;
+    for (int z = 0; z < 8; ++z) block.layers |= static_cast<std::uint8_t>(((*block.occupancy)[static_cast<std::size_t>(z)] != 0) << z);
     const auto& index = grid.index().block_at(b);
     Voxel* out = voxels_.get() + start_[b];
     int rank = 0;

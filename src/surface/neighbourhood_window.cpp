@@ -51,16 +51,21 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
             for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
                 const PackedVoxels::Block* block = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
                 if (!block) continue;
+                // The box's layers within this block that hold a voxel (most blocks of a lidar
+                // frame hold a few layers of ground or facade): the others are skipped.
+                const int z0 = std::max(l.z(), bz * B), z1 = std::min(h.z(), bz * B + m);
+                unsigned layers = block->layers & ((0xffu >> (m - ((z1 - z0) & m))) << (z0 & m));
+                if (!layers) continue;
                 // The box within this block, in block coordinates, and its 8x8 layer masks.
                 const int x0 = std::max(l.x(), bx * B), x1 = std::min(h.x(), bx * B + m);
                 const int y0 = std::max(l.y(), by * B), y1 = std::min(h.y(), by * B + m);
-                const int z0 = std::max(l.z(), bz * B), z1 = std::min(h.z(), bz * B + m);
                 const std::uint64_t full = layer_mask(x0 & m, x1 & m, y0 & m, y1 & m);
                 std::uint64_t ring = full;
                 const int hx0 = std::max(il.x(), x0), hx1 = std::min(ih.x(), x1);
                 const int hy0 = std::max(il.y(), y0), hy1 = std::min(ih.y(), y1);
                 if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
-                for (int z = z0; z <= z1; ++z) {
+                for (; layers; layers &= layers - 1) {
+                    const int z = bz * B + std::countr_zero(layers);
                     const bool cap = inset == 0 || (caps && (z == l.z() || z == h.z()));
                     std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(z & m)] & (cap ? full : ring);
                     while (bits) {

@@ -309,17 +309,17 @@ private:
 
 // The blocks an incremental re-mesh must redo (compute_seeded_tsdf's `previous`): the vertex
 // blocks within `reach` blocks of a touched voxel block (their windows can see a new point),
-// and, as flags per grid block, the voxel blocks within 2 `reach` (what those windows read: they
-// are packed up front; a clean vertex block that `previous` had not evaluated packs what its
-// window needs when it is built).
+// and, as flags per grid block, the voxel blocks within 2 `reach` (what those windows read, packed
+// up front; a clean vertex block that `previous` had not evaluated packs what its window needs
+// when it is built).
 struct DirtyRegion {
     BlockIndex vertex_blocks;
-    std::vector<std::uint8_t> packed_blocks;
+    std::vector<std::uint8_t> eager_blocks;
 };
 DirtyRegion dirty_region(const VoxelGrid& grid, int reach) {
     DirtyRegion d;
     const BlockMap<std::int32_t>& index = grid.index();
-    d.packed_blocks.assign(index.block_count(), 0);
+    d.eager_blocks.assign(index.block_count(), 0);
     for (std::uint32_t b : grid.touched_blocks()) {
         const VoxelKey key = index.block_keys()[b];
         for (int z = -2 * reach; z <= 2 * reach; ++z)
@@ -328,7 +328,7 @@ DirtyRegion dirty_region(const VoxelGrid& grid, int reach) {
                     const VoxelKey near = key + VoxelKey(x, y, z);
                     if (std::max({std::abs(x), std::abs(y), std::abs(z)}) <= reach) d.vertex_blocks.try_emplace(near, 0);
                     const std::int64_t i = index.index_of(near);
-                    if (i >= 0) d.packed_blocks[static_cast<std::size_t>(i)] = 1;
+                    if (i >= 0) d.eager_blocks[static_cast<std::size_t>(i)] = 1;
                 }
     }
     return d;
@@ -351,8 +351,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // page faults per 16 frames without it); capped so a huge grid does not reserve gigabytes.
     defined_vertices.reserve(std::min<std::size_t>(4 * grid.size(), std::size_t{1} << 22));
     std::atomic<std::size_t> evaluated{0}, reused{0};
-    const PackedVoxels packed(grid, previous ? &dirty.packed_blocks : nullptr);
-    const CornerEvaluator::Shared shared{slots,           packed,  config, grid.to_local(sensor_world), solver, config.truncation_distance(),
+    const PackedVoxels packed(grid, previous ? &dirty.eager_blocks : nullptr);
+    const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
                                          defined_vertices, evaluated, previous, dirty.vertex_blocks, reused};
     CubeSearch search(grid);
 

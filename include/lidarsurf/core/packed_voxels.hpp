@@ -33,6 +33,7 @@ public:
     struct Block {
         const Voxel* voxels = nullptr;                ///< the block's occupied voxels, in offset order
         const VoxelGrid::Occupancy* occupancy = nullptr;
+        std::uint8_t layers = 0;                      ///< bit z set when layer z holds a voxel
         std::array<std::uint16_t, 64> row_start{};    ///< rank of the first occupied voxel of row y + 8 z
         /// The record of the occupied voxel at `offset` (x + 8 y + 64 z, BlockMap::offset_of): its
         /// rank is the row's start plus the occupied voxels before x in the row (a byte table,
