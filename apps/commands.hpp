@@ -49,7 +49,7 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o);
 int run_bench(const BenchOptions& o);
 
 struct FuseOptions {
-    std::string dir, output, mesh_format = "auto";
+    std::string dir, output, mesh_format = "auto", calib;
     int first = 0, frames = 0, step = 1, remesh_every = 0;
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
 };

@@ -24,13 +24,16 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("--first", o.first, "First frame")->capture_default_str();
     f->add_option("--frames", o.frames, "Frames to fuse (0 = to the last)")->capture_default_str();
     f->add_option("--step", o.step, "Use every step-th frame")->capture_default_str();
+    f->add_option("--calib", o.calib,
+                  "KITTI calib.txt: the poses are the left camera's (KITTI's published ones); its Tr: line converts them "
+                  "to the lidar's");
     f->add_option("--remesh-every", o.remesh_every,
                   "Also extract the mesh after every this many fused frames, printing its time (0 = only at the end)")
         ->capture_default_str();
     add_reconstruct_options(f, o.reconstruct);
     f->footer("--origin is the sensor's position in the scan frame (0,0,0 for KITTI's velodyne frame).\n"
-              "Poses map the scan frame to the world (KITTI's published poses are the left camera's: convert\n"
-              "them with the calibration's Tr first).\n\n"
+              "Poses map the scan frame to the world; KITTI's published poses are the left camera's: give\n"
+              "the sequence's calib.txt with --calib and the world is frame 0's velodyne frame.\n\n"
               "Example:\n  lidarsurf simulate --frames 20 -o town && lidarsurf fuse town -o town.ply --remesh-every 1");
     return f;
 }
@@ -44,7 +47,8 @@ int run_fuse(const FuseOptions& o) {
     const KittiSequence seq{o.dir};
     const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
     if (!fs::exists(seq.poses())) throw IoError(seq.poses().string() + ": no poses file (one sensor-to-world pose per scan)");
-    const std::vector<Eigen::Isometry3d> poses = read_poses(seq.poses());
+    std::vector<Eigen::Isometry3d> poses = read_poses(seq.poses());
+    if (!o.calib.empty()) poses = lidar_poses(poses, read_calib_tr(o.calib));
     if (poses.size() < available)
         throw InvalidInput(seq.poses().string() + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(available) + " scans");
     const auto first = static_cast<std::size_t>(o.first);

@@ -58,6 +58,32 @@ std::vector<Eigen::Isometry3d> parse_poses(std::string_view data, const std::str
     return poses;
 }
 
+Eigen::Isometry3d read_calib_tr(const std::filesystem::path& path) { return parse_calib_tr(detail::read_file(path.string()), path.string()); }
+
+Eigen::Isometry3d parse_calib_tr(std::string_view data, const std::string& name) {
+    std::string_view rest = data;
+    while (!rest.empty()) {
+        std::string_view line = detail::next_line(rest);
+        while (!line.empty() && (line.front() == ' ' || line.front() == '\t')) line.remove_prefix(1);
+        if (line.substr(0, 3) != "Tr:") continue;
+        const std::vector<Eigen::Isometry3d> tr = parse_poses(line.substr(3), name + " (its Tr: line)");
+        if (tr.size() != 1) throw FormatError(name + ": the Tr: line holds no transform");
+        return tr.front();
+    }
+    throw FormatError(name + ": no 'Tr:' line (KITTI's calib.txt gives the velodyne-to-camera transform there)");
+}
+
+std::vector<Eigen::Isometry3d> lidar_poses(const std::vector<Eigen::Isometry3d>& camera_poses, const Eigen::Isometry3d& tr) {
+    std::vector<Eigen::Isometry3d> out;
+    out.reserve(camera_poses.size());
+    // The general inverse: KITTI's Tr is orthonormal only to ~1e-7, and Isometry3d::inverse()
+    // would transpose its rotation.
+    Eigen::Isometry3d tr_inv;
+    tr_inv.matrix() = tr.matrix().inverse();
+    for (const Eigen::Isometry3d& p : camera_poses) out.push_back(tr_inv * p * tr);
+    return out;
+}
+
 void write_poses(const std::vector<Eigen::Isometry3d>& poses, const std::filesystem::path& path) {
     AtomicFile file(path);
     auto& out = file.stream();

@@ -46,6 +46,12 @@ done
 expect 0 "frame 000001: .*reused [1-9]" -- "$cli" fuse "$seq" -o "$dir/fused.ply" --remesh-every 1
 [ -s "$dir/fused.ply" ] || { echo "FAIL: fuse wrote no mesh"; fail=$((fail + 1)); }
 expect 0 "1 frames fused" -- "$cli" fuse "$seq" -o "$dir/fused1.obj" --first 1 --frames 1
+printf 'P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: 1 0 0 0 0 1 0 0 0 0 1 0\n' > "$dir/calib.txt"
+expect 0 "2 frames fused" -- "$cli" fuse "$seq" -o "$dir/fused_calib.ply" --calib "$dir/calib.txt"
+"$cli" fuse "$seq" -o "$dir/fused_plain.ply" > /dev/null
+check "fuse --calib with an identity Tr gives the same mesh" -- cmp -s "$dir/fused_calib.ply" "$dir/fused_plain.ply"
+printf 'P0: 1 0 0 0 0 1 0 0 0 0 1 0\n' > "$dir/calib_bad.txt"
+expect 3 "no 'Tr:' line" -- "$cli" fuse "$seq" -o "$dir/x.ply" --calib "$dir/calib_bad.txt"
 expect 2 "first 5: the sequence has 2 scans" -- "$cli" fuse "$seq" -o "$dir/x.ply" --first 5
 expect 2 "step" -- "$cli" fuse "$seq" -o "$dir/x.ply" --step 0
 expect 2 "IMLS" -- "$cli" fuse "$seq" -o "$dir/x.ply" --method imls

@@ -62,6 +62,47 @@ TEST(KittiSequence, MalformedPosesNameTheLine) {
     fs::remove_all(d);
 }
 
+// KITTI's calib.txt: the Tr: line among the projection matrices; and camera poses converted to
+// the lidar's. Oracle: a lidar trajectory L_i and a velodyne-to-camera transform T give camera
+// poses P_i = T L_i T^-1 (what KITTI publishes); converting them back must give L_i, and a point
+// of scan i must land at the same world point (up to the fixed frame change) either way.
+TEST(KittiSequence, CalibrationTrConvertsCameraPosesToTheLidars) {
+    const fs::path d = temp_dir();
+    // KITTI's real odometry Tr (sequence 00), whose rotation is orthonormal to ~1e-7.
+    const std::string tr_line =
+        "Tr: 4.276802385584e-04 -9.999672484946e-01 -8.084491683471e-03 -1.198459927713e-02 "
+        "-7.210626507497e-03 8.081198471645e-03 -9.999413164504e-01 -5.403984729748e-02 "
+        "9.999738645903e-01 4.859485810390e-04 -7.206933692422e-03 -2.921968648686e-01\n";
+    write(d / "calib.txt", "P0: 7.18856e+02 0 6.071928e+02 0 0 7.18856e+02 1.852157e+02 0 0 0 1 0\n" + tr_line);
+    const Eigen::Isometry3d tr = read_calib_tr(d / "calib.txt");
+    EXPECT_NEAR(tr.translation().z(), -0.2921968648686, 1e-15);
+    EXPECT_NEAR(tr.linear()(0, 1), -0.9999672484946, 1e-15);
+    Eigen::Isometry3d tr_inv;
+    tr_inv.matrix() = tr.matrix().inverse();
+    std::vector<Eigen::Isometry3d> lidar, camera;
+    for (int i = 0; i < 4; ++i) {
+        Eigen::Isometry3d l = Eigen::Isometry3d::Identity();
+        l.rotate(Eigen::AngleAxisd(0.2 * i, Eigen::Vector3d::UnitZ()));
+        l.translation() = Eigen::Vector3d(3.0 * i, 0.5 * i, 0.01 * i);
+        lidar.push_back(l);
+        camera.push_back(tr * l * tr_inv);
+    }
+    const std::vector<Eigen::Isometry3d> back = lidar_poses(camera, tr);
+    ASSERT_EQ(back.size(), lidar.size());
+    const Eigen::Vector3d p(12.0, -3.0, -1.7);  // a point of each scan, velodyne frame
+    for (std::size_t i = 0; i < lidar.size(); ++i) {
+        EXPECT_TRUE(back[i].matrix().isApprox(lidar[i].matrix(), 1e-12)) << i;
+        // KITTI's way: world (camera 0) point = P_i Tr p; ours: Tr^-1 P_i Tr p, the same point in frame 0's velodyne frame.
+        EXPECT_LT((tr * (back[i] * p) - camera[i] * (tr * p)).norm(), 1e-9) << i;
+    }
+    write(d / "no_tr.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+    EXPECT_THROW(read_calib_tr(d / "no_tr.txt"), FormatError);
+    write(d / "short_tr.txt", "Tr: 1 0 0 0 0 1 0 0 0 0 1\n");
+    EXPECT_THROW(read_calib_tr(d / "short_tr.txt"), FormatError);
+    EXPECT_THROW(read_calib_tr(d / "missing.txt"), IoError);
+    fs::remove_all(d);
+}
+
 TEST(KittiSequence, CountsConsecutiveFrames) {
     const fs::path d = temp_dir();
     const KittiSequence seq{d};

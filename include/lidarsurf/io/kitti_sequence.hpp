@@ -38,6 +38,17 @@ std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path);
 /// The same on an in-memory buffer (used by read_poses and by the fuzzers). `name` is for messages.
 std::vector<Eigen::Isometry3d> parse_poses(std::string_view data, const std::string& name);
 
+/// The velodyne-to-camera transform `Tr` of a KITTI odometry calib.txt (its "Tr:" line, 12
+/// numbers). Throws IoError if unreadable and FormatError if the line is absent or malformed.
+Eigen::Isometry3d read_calib_tr(const std::filesystem::path& path);
+/// The same on an in-memory buffer. `name` is for messages.
+Eigen::Isometry3d parse_calib_tr(std::string_view data, const std::string& name);
+
+/// KITTI's published odometry poses are the left camera's (camera frame i to camera frame 0);
+/// with the calibration's Tr (velodyne to camera) the lidar's poses in the velodyne frame of
+/// frame 0 are Tr^-1 * P_i * Tr: a scan's points p go to the world as Tr^-1 P_i Tr p.
+std::vector<Eigen::Isometry3d> lidar_poses(const std::vector<Eigen::Isometry3d>& camera_poses, const Eigen::Isometry3d& tr);
+
 /// Writes a KITTI poses file atomically (full double precision).
 void write_poses(const std::vector<Eigen::Isometry3d>& poses, const std::filesystem::path& path);
 
