@@ -10,10 +10,10 @@ numpy in, numpy out; the same Config as the C++ library and the CLI.
 import json as _json
 
 from ._lidarsurf import (Config, Mesh, Reconstructor, __version__, points_view, read_mesh, read_points,
-                         reconstruct, simulate)
+                         read_poses, reconstruct, simulate)
 from ._lidarsurf import _evaluate_json
 
-__all__ = ["Config", "Mesh", "Reconstructor", "reconstruct", "read_points", "read_mesh", "evaluate", "simulate", "points_view",
+__all__ = ["Config", "Mesh", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "evaluate", "simulate", "points_view",
            "__version__"]
 
 

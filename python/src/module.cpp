@@ -13,6 +13,7 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/eval/report.hpp"
+#include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
 #include "lidarsurf/pipeline.hpp"
@@ -327,6 +328,27 @@ PYBIND11_MODULE(_lidarsurf, m) {
             return read_mesh(path);
         },
         py::arg("path"), "Read a triangle mesh (.ply or .obj).");
+
+    m.def(
+        "read_poses",
+        [](const std::string& path, std::optional<std::string> calib) {
+            std::vector<Eigen::Isometry3d> poses;
+            {
+                py::gil_scoped_release release;
+                poses = read_poses(path);
+                if (calib) poses = lidar_poses(poses, read_calib_tr(*calib));
+            }
+            py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
+            auto a = out.mutable_unchecked<3>();
+            for (std::size_t i = 0; i < poses.size(); ++i)
+                for (int r = 0; r < 4; ++r)
+                    for (int c = 0; c < 4; ++c) a(static_cast<py::ssize_t>(i), r, c) = poses[i].matrix()(r, c);
+            return out;
+        },
+        py::arg("path"), py::arg("calib") = py::none(),
+        "Read a KITTI poses file (one 3x4 row-major pose a line) as an (N, 4, 4) float64 array. With `calib`, a KITTI "
+        "calib.txt, the poses (KITTI's published ones are the left camera's) become the lidar's: Tr^-1 P Tr. For "
+        "Reconstructor.integrate_from(points @ R.T + t, viewpoint=t).");
 
     m.def(
         "_evaluate_json",

@@ -216,3 +216,27 @@ def test_reconstructor_fuses_scans_seen_from_several_positions(scan):
     assert abs(len(both.vertices) - 2 * len(one.vertices)) < 0.02 * len(one.vertices)
     with pytest.raises(ValueError, match="viewpoint"):
         rec.integrate_from(scan, (0, 0))
+
+
+def test_read_poses_and_the_calibration(tmp_path):
+    # Two lidar poses L, a velodyne-to-camera Tr; the file holds KITTI's camera poses Tr L Tr^-1.
+    def rot_z(a, t):
+        m = np.eye(4)
+        m[:2, :2] = [[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]
+        m[:3, 3] = t
+        return m
+    tr = np.array([[0, -1, 0, 0.1], [0, 0, -1, -0.05], [1, 0, 0, -0.3], [0, 0, 0, 1.0]])
+    lidar = [rot_z(0.0, (0, 0, 0)), rot_z(0.3, (5.0, 1.0, 0.2))]
+    camera = [tr @ l @ np.linalg.inv(tr) for l in lidar]
+    np.savetxt(tmp_path / "poses.txt", np.array([c[:3].reshape(-1) for c in camera]), fmt="%.17g")
+    (tmp_path / "calib.txt").write_text("P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: " + " ".join("%.17g" % x for x in tr[:3].reshape(-1)) + "\n")
+    raw = lidarsurf.read_poses(str(tmp_path / "poses.txt"))
+    assert raw.shape == (2, 4, 4)
+    np.testing.assert_allclose(raw, camera, atol=1e-12)
+    np.testing.assert_allclose(lidarsurf.read_poses(str(tmp_path / "poses.txt"), calib=str(tmp_path / "calib.txt")), lidar,
+                               atol=1e-12)
+    with pytest.raises(OSError):
+        lidarsurf.read_poses(str(tmp_path / "missing.txt"))
+    (tmp_path / "bad.txt").write_text("P0: 1 0 0 0 0 1 0 0 0 0 1 0\n")
+    with pytest.raises(ValueError, match="Tr:"):
+        lidarsurf.read_poses(str(tmp_path / "poses.txt"), calib=str(tmp_path / "bad.txt"))
