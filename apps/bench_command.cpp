@@ -22,6 +22,10 @@
 #include "lidarsurf/sim/procedural_scene.hpp"
 #include "lidarsurf/sim/simulator.hpp"
 
+#ifndef LIDARSURF_SOURCE_DIR
+#define LIDARSURF_SOURCE_DIR ""
+#endif
+
 namespace fs = std::filesystem;
 
 namespace lidarsurf::cli {
@@ -297,7 +301,7 @@ SimulatedInputs simulate_inputs(const fs::path& dir, int frames) {
 
 CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     CLI::App* b = app.add_subcommand("bench", "End-to-end speed per stage: fast path vs reference vs IMLS, size and thread scaling");
-    b->add_option("scans", o.scans, "Scans to time (default: simulated HDL-64 town frames)");
+    b->add_option("scans", o.scans, "Scans to time (default: simulated HDL-64 town frames, and the real KITTI frames of ../shared/data/kitti beside the source tree when present)");
     b->add_option("--repeat", o.repeat, "Runs per row for the fast path (median reported)")->capture_default_str();
     b->add_option("--slow-repeat", o.slow_repeat, "Runs per row for the reference path and IMLS")->capture_default_str();
     b->add_option("--frames", o.frames, "Simulated frames when no scan is given")->capture_default_str();
@@ -327,6 +331,19 @@ int run_bench(const BenchOptions& o) {
         SimulatedInputs in = simulate_inputs(tmp, o.frames);
         scans = in.frames;
         sizes = in.sizes;
+        // The real KITTI frames beside the source tree (../shared/data/kitti, see its README), when
+        // present: the simulated town is an easier scene than a real street (docs/benchmarks.md).
+        const fs::path kitti = fs::path(LIDARSURF_SOURCE_DIR) / ".." / "shared" / "data" / "kitti";
+        std::error_code ec;
+        for (std::size_t i = 0; !std::string(LIDARSURF_SOURCE_DIR).empty(); ++i) {
+            char name[32];
+            std::snprintf(name, sizeof name, "%06zu", i);
+            const fs::path scan = kitti / (std::string(name) + ".bin");
+            if (!fs::is_regular_file(scan, ec)) break;
+            scans.emplace_back(scan, std::string("kitti ") + name);
+        }
+        if (scans.size() > in.frames.size())
+            std::fprintf(stderr, "bench: and %zu real KITTI frames from %s\n", scans.size() - in.frames.size(), kitti.c_str());
     } else {
         for (const std::string& s : o.scans) {
             if (!fs::is_regular_file(s)) throw IoError("cannot read '" + s + "': not a file");
