@@ -1,13 +1,10 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 
-#include <algorithm>
-#include <bit>
 #include <cmath>
 #include <sstream>
 
 #include <tbb/parallel_for.h>
 
-#include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
@@ -150,29 +147,12 @@ void VoxelGrid::enable_viewpoints(const Eigen::Vector3d& earlier) {
 
 std::optional<Eigen::Vector3d> VoxelGrid::mean_viewpoint(const VoxelKey& lo, const VoxelKey& hi) const {
     if (!viewpoints_enabled_) throw InvalidArgument("mean_viewpoint: the grid has no viewpoints");
-    using Map = BlockMap<std::int32_t>;
-    constexpr int B = Map::kSize, m = B - 1;
-    const VoxelKey blo = Map::block_of(lo), bhi = Map::block_of(hi);
     double count = 0;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int bz = blo.z(); bz <= bhi.z(); ++bz)
-        for (int by = blo.y(); by <= bhi.y(); ++by)
-            for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
-                const std::int64_t b = index_.index_of({bx, by, bz});
-                if (b < 0) continue;
-                const Map::Block& block = index_.block_at(static_cast<std::size_t>(b));
-                const Occupancy& occupied = occupancy_[static_cast<std::size_t>(b)];
-                const int x0 = std::max(lo.x(), bx * B), x1 = std::min(hi.x(), bx * B + m);
-                const int y0 = std::max(lo.y(), by * B), y1 = std::min(hi.y(), by * B + m);
-                const int z0 = std::max(lo.z(), bz * B), z1 = std::min(hi.z(), bz * B + m);
-                const std::uint64_t mask = layer_mask(x0 & m, x1 & m, y0 & m, y1 & m);
-                for (int z = z0; z <= z1; ++z)
-                    for (std::uint64_t bits = occupied[static_cast<std::size_t>(z & m)] & mask; bits; bits &= bits - 1) {
-                        const auto v = static_cast<std::size_t>(block[static_cast<std::size_t>(std::countr_zero(bits) | ((z & m) << 6))]);
-                        count += static_cast<double>(stats_[v].count);
-                        sum += viewpoint_sums_[v];
-                    }
-            }
+    for_each_index_in_box(lo, hi, [&](const VoxelKey&, std::size_t v) {
+        count += static_cast<double>(stats_[v].count);
+        sum += viewpoint_sums_[v];
+    });
     if (count <= 0) return std::nullopt;
     return sum / count;
 }

@@ -13,14 +13,6 @@ namespace lidarsurf {
 
 using BlockMask = std::array<std::uint64_t, 8>;
 
-/// Bits x0..x1 of each of the rows y0..y1 of an 8x8 layer (bit x + 8 y), 0 <= x0 <= x1 < 8,
-/// 0 <= y0 <= y1 < 8.
-inline std::uint64_t layer_mask(int x0, int x1, int y0, int y1) {
-    const std::uint64_t row = (0xffu >> (7 - (x1 - x0))) << x0;
-    const std::uint64_t rows = (~std::uint64_t{0} >> (8 * (7 - (y1 - y0)))) << (8 * y0);  // bytes y0..y1
-    return (row * 0x0101010101010101ull) & rows;
-}
-
 /// Calls f(offset) for every set bit of `mask`, in increasing offset (x fastest, then y, then z,
 /// as BlockMap::offset_of).
 template <typename F>

@@ -5,7 +5,9 @@
 // statistics, so that box queries over H^k(v) read contiguous memory. Statistics are kept in a
 // local frame (world minus `origin`, a multiple of alpha chosen from the first point) so that
 // coordinates far from the world origin (UTM maps, 1e6 m) keep full precision.
+#include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -18,6 +20,14 @@
 #include "lidarsurf/core/voxel_stats.hpp"
 
 namespace lidarsurf {
+
+/// Bits x0..x1 of each of the rows y0..y1 of an 8x8 layer (bit x + 8 y, the layout of
+/// VoxelGrid::Occupancy and BlockMask), 0 <= x0 <= x1 < 8, 0 <= y0 <= y1 < 8.
+inline std::uint64_t layer_mask(int x0, int x1, int y0, int y1) {
+    const std::uint64_t row = (0xffu >> (7 - (x1 - x0))) << x0;
+    const std::uint64_t rows = (~std::uint64_t{0} >> (8 * (7 - (y1 - y0)))) << (8 * y0);  // bytes y0..y1
+    return (row * 0x0101010101010101ull) & rows;
+}
 
 class VoxelGrid {
 public:
@@ -58,9 +68,12 @@ public:
     /// Statistics of a voxel (local frame), or nullptr if empty.
     const VoxelStats* find(const VoxelKey& key) const;
 
-    /// Calls f(key, stats) for each occupied voxel with lo <= key <= hi (inclusive box).
+    /// Calls f(key, stats) for each occupied voxel with lo <= key <= hi (inclusive box), by block
+    /// (z, y, x order), then by voxel (z, y, x order), skipping empty space through the occupancy bits.
     template <typename F>
-    void for_each_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const;
+    void for_each_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const {
+        for_each_index_in_box(lo, hi, [&](const VoxelKey& key, std::size_t v) { f(key, stats_[v]); });
+    }
 
     /// Number of occupied voxels.
     std::size_t size() const { return stats_.size(); }
@@ -94,6 +107,9 @@ public:
 
 private:
     void set_origin_from(const Eigen::Vector3d& world);
+    // for_each_in_box with the voxel's index into stats_ instead of its statistics.
+    template <typename F>
+    void for_each_index_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const;
     /// Index of the voxel `key`, created if absent: its key is appended to keys_, and the caller
     /// extends stats_ to keys_.size() (once per batch rather than once per new voxel).
     std::int32_t voxel_index(const VoxelKey& key);
@@ -117,25 +133,27 @@ private:
 };
 
 template <typename F>
-void VoxelGrid::for_each_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const {
+void VoxelGrid::for_each_index_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const {
     using Map = BlockMap<std::int32_t>;
-    constexpr int kBlockSize = Map::kSize;
+    constexpr int B = Map::kSize, m = B - 1;
     const VoxelKey blo = Map::block_of(lo), bhi = Map::block_of(hi);
     for (int bz = blo.z(); bz <= bhi.z(); ++bz)
         for (int by = blo.y(); by <= bhi.y(); ++by)
             for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
-                const Map::Block* block = index_.find_block({bx, by, bz});
-                if (!block) continue;
-                const int x0 = std::max(lo.x(), bx * kBlockSize), x1 = std::min(hi.x(), bx * kBlockSize + kBlockSize - 1);
-                const int y0 = std::max(lo.y(), by * kBlockSize), y1 = std::min(hi.y(), by * kBlockSize + kBlockSize - 1);
-                const int z0 = std::max(lo.z(), bz * kBlockSize), z1 = std::min(hi.z(), bz * kBlockSize + kBlockSize - 1);
+                const std::int64_t b = index_.index_of({bx, by, bz});
+                if (b < 0) continue;
+                const Map::Block& block = index_.block_at(static_cast<std::size_t>(b));
+                const Occupancy& occupied = occupancy_[static_cast<std::size_t>(b)];
+                const int x0 = std::max(lo.x(), bx * B), x1 = std::min(hi.x(), bx * B + m);
+                const int y0 = std::max(lo.y(), by * B), y1 = std::min(hi.y(), by * B + m);
+                const int z0 = std::max(lo.z(), bz * B), z1 = std::min(hi.z(), bz * B + m);
+                const std::uint64_t mask = layer_mask(x0 & m, x1 & m, y0 & m, y1 & m);
                 for (int z = z0; z <= z1; ++z)
-                    for (int y = y0; y <= y1; ++y)
-                        for (int x = x0; x <= x1; ++x) {
-                            const VoxelKey key{x, y, z};
-                            const std::int32_t idx = (*block)[static_cast<std::size_t>(Map::offset_of(key))];
-                            if (idx >= 0) f(key, stats_[static_cast<std::size_t>(idx)]);
-                        }
+                    for (std::uint64_t bits = occupied[static_cast<std::size_t>(z & m)] & mask; bits; bits &= bits - 1) {
+                        const int bit = std::countr_zero(bits);
+                        const VoxelKey key{bx * B + (bit & m), by * B + (bit >> 3), z};
+                        f(key, static_cast<std::size_t>(block[static_cast<std::size_t>(bit | ((z & m) << 6))]));
+                    }
             }
 }
 
