@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/point_writer.hpp"
 #include "lidarsurf/sim/procedural_scene.hpp"
 #include "lidarsurf/sim/simulator.hpp"
@@ -336,11 +337,10 @@ int run_bench(const BenchOptions& o) {
         const fs::path kitti = fs::path(LIDARSURF_SOURCE_DIR) / ".." / "shared" / "data" / "kitti";
         std::error_code ec;
         for (std::size_t i = 0; !std::string(LIDARSURF_SOURCE_DIR).empty(); ++i) {
-            char name[32];
-            std::snprintf(name, sizeof name, "%06zu", i);
-            const fs::path scan = kitti / (std::string(name) + ".bin");
+            const std::string name = KittiSequence::frame_name(i);
+            const fs::path scan = kitti / (name + ".bin");
             if (!fs::is_regular_file(scan, ec)) break;
-            scans.emplace_back(scan, std::string("kitti ") + name);
+            scans.emplace_back(scan, "kitti " + name);
         }
         if (scans.size() > in.frames.size())
             std::fprintf(stderr, "bench: and %zu real KITTI frames from %s\n", scans.size() - in.frames.size(), kitti.c_str());
@@ -357,6 +357,7 @@ int run_bench(const BenchOptions& o) {
     try {
         const CpuTimes start = cpu_times();
         std::vector<Row> rows, size_rows, thread_rows, sector_rows;
+        std::string sector_scan;  // the label of the scan the incremental table splits
         for (const auto& [path, label] : scans) {
             std::fprintf(stderr, "bench: %s\n", label.c_str());
             rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
@@ -371,6 +372,7 @@ int run_bench(const BenchOptions& o) {
             if (method.config.seeded_surface) {
                 std::fprintf(stderr, "bench: %s in sectors\n", mid.second.c_str());
                 sector_rows = run_sector_rows(mid.first, method, threads, o.slow_repeat, 10);
+                sector_scan = mid.second;
             }
         }
 
@@ -400,7 +402,7 @@ int run_bench(const BenchOptions& o) {
             std::printf("\nincremental re-meshing, %s delivered in 10 azimuth sectors, a mesh after each (sums over the\n"
                         "revolution; fast = a new reconstruction of all sectors so far each time, reuse = one Reconstructor\n"
                         "that re-evaluates only what the new sector reaches; the same final mesh):\n",
-                        (sizes.size() == 4 ? sizes[2] : sizes.front()).second.c_str());
+                        sector_scan.c_str());
             std::fputs(format_rows(sector_rows, true).c_str(), stdout);
         }
         if (!o.json.empty()) {
