@@ -118,6 +118,7 @@ CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
         "  lidarsurf simulate -o town && lidarsurf benchmark town\n"
         "  lidarsurf benchmark town --frames 10 --methods 'AN+GC kmax=5,IMLS'\n"
         "  lidarsurf benchmark town --methods 'AN+GC kmax=5' --peers town/peers\n"
+        "  lidarsurf benchmark town --methods default --slab 0   (the default row with other settings)\n"
         "Reads DIR/velodyne and DIR/gt (KITTI layout, sensor frame); with DIR/scene.ply and poses.txt\n"
         "also the true surface (plus DIR/objects/NNNNNN.ply). Writes DIR/benchmark/table.txt,\n"
         "results.csv, results.json and, with python3-matplotlib, fig6a_range.png and fig6b_delta.png.\n");
@@ -130,9 +131,9 @@ CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
     b->add_option("--max-range", o.max_range, "Evaluate only within this range of the sensor (0 = all)")->capture_default_str();
     b->add_flag("--ablation", o.ablation, "Run the ablation rows (paper AN+GC to the default, one guard at a time) instead of Table I");
     b->add_flag("--no-plots", o.no_plots, "Do not draw the figures");
-    b->add_option("--voxel", o.config.voxel_size, "Voxel size alpha in metres")->capture_default_str();
-    b->add_option("--tau", o.config.tau, "Gaussian confidence threshold tau")->capture_default_str();
-    b->add_option("--nmin", o.config.n_min, "Minimum points N_min")->capture_default_str();
+    // The configuration of the default row (and the ablation's end point); Table I's rows take
+    // alpha, tau and N_min from it, the rest from the paper.
+    add_config_options(b, o.config, false);
     b->add_option("--threads", o.config.threads, "Worker threads (0 = all cores)")->capture_default_str();
     return b;
 }

@@ -50,32 +50,38 @@ int exit_code(const Error& e) {
 }
 
 
-void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
-    ReconstructionConfig& c = o.config;
-    app->add_option("--method", o.method, "paper (Roldao et al., --mode selects the variant) | imls (baseline)")->capture_default_str();
+std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig& c, bool with_constant_level) {
     app->add_option("--voxel", c.voxel_size, "Voxel size alpha in metres")->capture_default_str();
     app->add_option("--tau", c.tau, "Gaussian confidence threshold tau, Eq. (3)")->capture_default_str();
     app->add_option("--nmin", c.n_min, "Minimum points N_min in a neighbourhood, Eq. (1)")->capture_default_str();
     app->add_option("--kmax", c.k_max, "Largest neighbourhood level k_max (adaptive modes)")->capture_default_str();
-    app->add_option("--k", c.k, "Neighbourhood level k (constant modes cn, cn+gc)")->capture_default_str();
+    if (with_constant_level) app->add_option("--k", c.k, "Neighbourhood level k (constant modes cn, cn+gc)")->capture_default_str();
+    std::vector<CLI::Option*> guards{
+        app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"),
+        app->add_option("--max-thickness", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"),
+        app->add_option("--slab", c.slab_from_level,
+                        "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"),
+        app->add_option("--slab-radial", c.slab_radial_extension,
+                        "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"),
+        app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"),
+        app->add_option("--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"),
+        app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"),
+        app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"),
+        app->add_option("--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"),
+    };
+    for (auto* opt : guards) opt->capture_default_str();
+    return guards;
+}
+
+void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
+    ReconstructionConfig& c = o.config;
+    app->add_option("--method", o.method, "paper (Roldao et al., --mode selects the variant) | imls (baseline)")->capture_default_str();
+    const std::vector<CLI::Option*> guards = add_config_options(app, c, true);
     app->add_option("--mode", o.mode, "an+gc | an | cn+gc | cn (Sec. IV-B)")->capture_default_str();
     app->add_option("--origin", o.origin, "Sensor position x,y,z (orients the normals, Eq. 2)")->capture_default_str();
     auto* literal = app->add_flag("--literal", o.literal,
                                   "The paper as written: no planarity or thickness guard, no slab fallback, no truncation, every defined cube, no snapping");
-    for (auto* opt : {
-             app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"),
-             app->add_option("--max-thickness", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"),
-             app->add_option("--slab", c.slab_from_level,
-                             "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"),
-             app->add_option("--slab-radial", c.slab_radial_extension,
-                             "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"),
-             app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"),
-             app->add_option("--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"),
-             app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"),
-             app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"),
-             app->add_option("--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"),
-         })
-        opt->capture_default_str()->excludes(literal);
+    for (auto* opt : guards) opt->excludes(literal);
     app->add_option("--max-memory", c.max_memory_mb, "Memory budget in MiB: refuse (exit 5, with the estimate) a cloud needing more")->capture_default_str();
     app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();

@@ -22,7 +22,11 @@ void check_output(const std::filesystem::path& input, const std::filesystem::pat
 /// 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget; 1: anything else.
 int exit_code(const Error& e);
 
-/// Options shared by `reconstruct`, `evaluate --holdout` and `benchmark`.
+/// The ReconstructionConfig options (--voxel, --tau, --nmin, --kmax, [--k,] the guards), filling
+/// `c` whose values are the defaults shown. Returns the guard options (the ones --literal excludes).
+std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig& c, bool with_constant_level);
+
+/// Options shared by `reconstruct`, `evaluate --holdout`, `bench` and `fuse`.
 struct ReconstructOptions {
     std::string format = "auto", origin = "0,0,0", mode = "an+gc", method = "paper";
     int bin_fields = 4;

@@ -193,7 +193,7 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
 }
 
 // Radial slabs on the same street. The sensor at (-3, 0, 1.7) sees v along x, across the rings:
-// with the default extension (3 voxels), S^3 spans x in [-0.6, 1.8) and holds both rings, so v is
+// with an extension of 3 voxels (the session-11 default), S^3 spans x in [-0.6, 1.8) and holds both rings, so v is
 // defined one level earlier than with square slabs. Seen along y instead (sensor at
 // (0.6, -5, 1.7)), the slabs extend along the rings, S^3 holds one ring (a line) and v is defined
 // at level 4 as with square slabs. Both paths agree.
@@ -202,7 +202,7 @@ TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {
     const VoxelKey v(3, 0, 1);
     const Eigen::Vector3d position(0.6, 0.0, 0.2);
     ReconstructionConfig c;
-    ASSERT_EQ(c.slab_radial_extension, 3);
+    c.slab_radial_extension = 3;
     const PackedVoxels packed(g);
     const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), c.max_reach());
     ASSERT_EQ(c.max_reach(), c.k_max + 3);

@@ -53,7 +53,7 @@ struct ReconstructionConfig {
     /// the horizontal axis nearer the direction from the sensor (across the scan rings, whose
     /// spacing on the ground grows with the square of the range), so it can hold two rings where
     /// a square one holds one (docs/method.md, "Radial slabs"). In [0, 32]; 0 = square slabs.
-    int slab_radial_extension = 3;
+    int slab_radial_extension = 8;
     /// Moves each marching-cubes vertex onto the plane Pi^{k'} of the nearer corner of its edge
     /// (docs/method.md, "Snapping").
     bool snap_to_plane = true;
