@@ -19,19 +19,31 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
     return s;
 }
 
+namespace {
+// The address that marks a window block not looked up yet (never dereferenced).
+const PackedVoxels::Block kNotLookedUpBlock{};
+const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
+}  // namespace
+
 NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level)
-    : grid_(&voxels.grid()), alpha_(voxels.grid().voxel_size()) {
-    using Map = BlockMap<std::int32_t>;
+    : voxels_(&voxels), grid_(&voxels.grid()), alpha_(voxels.grid().voxel_size()) {
     // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
     // radius ceil(k/8) blocks of b.
-    radius_ = (max_level + Map::kSize - 1) / Map::kSize;
+    radius_ = (max_level + BlockMap<std::int32_t>::kSize - 1) / BlockMap<std::int32_t>::kSize;
     side_ = 2 * radius_ + 1;
-    first_voxel_ = (vertex_block.array() - radius_) * Map::kSize;
-    blocks_.resize(static_cast<std::size_t>(side_ * side_ * side_));
-    std::size_t i = 0;
-    for (int z = -radius_; z <= radius_; ++z)
-        for (int y = -radius_; y <= radius_; ++y)
-            for (int x = -radius_; x <= radius_; ++x, ++i) blocks_[i] = voxels.find(vertex_block + VoxelKey(x, y, z));
+    reset(vertex_block);
+}
+
+void NeighbourhoodWindow::reset(const VoxelKey& vertex_block) {
+    first_block_ = vertex_block.array() - radius_;
+    first_voxel_ = first_block_ * BlockMap<std::int32_t>::kSize;
+    blocks_.assign(static_cast<std::size_t>(side_ * side_ * side_), kNotLookedUp);
+}
+
+const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int bz) const {
+    const PackedVoxels::Block*& b = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
+    if (b == kNotLookedUp) b = voxels_->find(first_block_ + VoxelKey(bx, by, bz));
+    return b;
 }
 
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
@@ -49,7 +61,7 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
     for (int bz = l.z() / B; bz <= h.z() / B; ++bz)
         for (int by = l.y() / B; by <= h.y() / B; ++by)
             for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
-                const PackedVoxels::Block* block = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
+                const PackedVoxels::Block* block = this->block(bx, by, bz);
                 if (!block) continue;
                 // The box's layers within this block that hold a voxel (most blocks of a lidar
                 // frame hold a few layers of ground or facade): the others are skipped.

@@ -293,7 +293,8 @@ private:
         for (int w = 0; w < kWindows; ++w)
             if (windows_[w] && window_block_[w] == block) return *windows_[w];
         const int w = next_window_++ % kWindows;
-        windows_[w].emplace(s_.packed, block, s_.config.max_reach());
+        if (windows_[w]) windows_[w]->reset(block);
+        else windows_[w].emplace(s_.packed, block, s_.config.max_reach());
         window_block_[w] = block;
         return *windows_[w];
     }

@@ -1,7 +1,8 @@
 #pragma once
 // Fast neighbourhood statistics for the vertices of one 8^3 vertex block (issue 5). The packed
-// voxel blocks (PackedVoxels) that any H^k(v), k <= max_level, of those vertices can reach are
-// looked up once (3x3x3 blocks for k_max <= 8), so summing a box needs no hashing, skips empty
+// voxel blocks (PackedVoxels) that any H^k(v), k <= max_level, of those vertices can reach
+// (3x3x3 blocks for max_level <= 8, 5x5x5 up to 16) are looked up at most once each, when a box
+// first reaches them, so summing a box needs no hashing, skips empty
 // space 64 voxels at a time (VoxelGrid::occupancy) and reads compact records stored in block
 // order; and each occupied voxel is added as
 // raw moments in the frame of the vertex,
@@ -32,8 +33,11 @@ struct Moments {
 class NeighbourhoodWindow {
 public:
     /// Window for the vertices of vertex block `vertex_block` (vertices 8 b .. 8 b + 7 per axis)
-    /// and levels up to `max_level`.
+    /// and levels up to `max_level`. The sums cache their block lookups in the window, so one
+    /// window must not be used by two threads at once (`voxels` itself is thread-safe).
     NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level);
+    /// Makes this the window of another vertex block (same voxels and levels; keeps the storage).
+    void reset(const VoxelKey& vertex_block);
 
     /// Adds the voxels of H^k(v) \ H^{k-1}(v) (all of H^1 for k = 1) to `acc`, whose reference
     /// point is v's position. v must be in the window's vertex block and k <= max_level.
@@ -57,12 +61,21 @@ private:
     // 8x8 layer.
     void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc, bool caps = true) const;
 
+    // Block (bx, by, bz) of the window, looked up on first use.
+    const PackedVoxels::Block* block(int bx, int by, int bz) const;
+
+    const PackedVoxels* voxels_;
     const VoxelGrid* grid_;
     double alpha_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1
+    VoxelKey first_block_;  // smallest block key covered by the window
     VoxelKey first_voxel_;  // smallest voxel key covered by the window
-    std::vector<const PackedVoxels::Block*> blocks_;  // side^3 blocks, x fastest (nullptr: no voxel)
+    // side^3 blocks, x fastest: nullptr when the block holds no voxel, kNotLookedUp before the
+    // first box that reaches it. Most boxes stay within the 3x3x3 blocks around the vertex block
+    // (the 5x5x5 of the radial slabs are reached along one axis), and a window is built per
+    // vertex block a task meets, so looking all of them up front cost ~9 % of a KITTI frame.
+    mutable std::vector<const PackedVoxels::Block*> blocks_;
 };
 
 }  // namespace lidarsurf
