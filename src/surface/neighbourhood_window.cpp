@@ -26,7 +26,7 @@ const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
 }  // namespace
 
 NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level)
-    : voxels_(&voxels), grid_(&voxels.grid()), alpha_(voxels.grid().voxel_size()) {
+    : voxels_(&voxels), alpha_(voxels.grid().voxel_size()) {
     // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
     // radius ceil(k/8) blocks of b.
     radius_ = (max_level + BlockMap<std::int32_t>::kSize - 1) / BlockMap<std::int32_t>::kSize;

@@ -193,8 +193,8 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
 }
 
 // Radial slabs on the same street. The sensor at (-3, 0, 1.7) sees v along x, across the rings:
-// with an extension of 3 voxels (the session-11 default), S^3 spans x in [-0.6, 1.8) and holds both rings, so v is
-// defined one level earlier than with square slabs. Seen along y instead (sensor at
+// with an extension of 3 voxels (the session-11 default), S^3 spans x in [-0.6, 1.8) and holds
+// both rings, so v is defined one level earlier than with square slabs. Seen along y instead (sensor at
 // (0.6, -5, 1.7)), the slabs extend along the rings, S^3 holds one ring (a line) and v is defined
 // at level 4 as with square slabs. Both paths agree.
 TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {

@@ -52,7 +52,7 @@ public:
     void grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e = {}) const;
 
     double voxel_size() const { return alpha_; }
-    const VoxelGrid& grid() const { return *grid_; }
+    const VoxelGrid& grid() const { return voxels_->grid(); }
 
 private:
     // Adds the voxels of the box lo <= key <= hi (inclusive) to acc, without its interior box
@@ -65,7 +65,6 @@ private:
     const PackedVoxels::Block* block(int bx, int by, int bz) const;
 
     const PackedVoxels* voxels_;
-    const VoxelGrid* grid_;
     double alpha_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1
