@@ -74,6 +74,28 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
     }
 }
 
+// One window moved from block to block with reset() (as the fast path reuses its few windows)
+// sums what merge_neighbourhood does: no block looked up for a previous vertex block survives.
+TEST(NeighbourhoodWindow, AResetWindowSumsItsNewBlock) {
+    const double alpha = 0.2;
+    const VoxelGrid grid = wavy_grid(alpha);
+    const PackedVoxels packed(grid);
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> c(-16, 16), cz(-4, 4);
+    NeighbourhoodWindow window(packed, VoxelKey::Zero(), 13);  // radius 2, as with the default's radial slabs
+    std::size_t compared = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        const VoxelKey v(c(rng), c(rng), cz(rng));
+        window.reset(vertex_block(v));
+        const int k = 1 + trial % 13;
+        const VoxelStats reference = merge_neighbourhood(grid, v, k);
+        compared += reference.count > 0;
+        expect_same_stats(window.box(v, k).to_stats(v.cast<double>() * alpha), reference, alpha,
+                          "v=" + std::to_string(v.x()) + "," + std::to_string(v.y()) + "," + std::to_string(v.z()) + " k=" + std::to_string(k));
+    }
+    EXPECT_GT(compared, 150u);  // most boxes hold points: the comparison is not vacuous
+}
+
 TEST(NeighbourhoodWindow, RefusesABoxBeyondItsBlocks) {
     const VoxelGrid grid = wavy_grid(0.2);
     const PackedVoxels packed(grid);
