@@ -31,6 +31,17 @@ VoxelGrid wavy_grid(double alpha) {
 
 VoxelKey vertex_block(const VoxelKey& v) { return BlockMap<std::int32_t>::block_of(v); }
 
+// A vertex at random among the blocks that wavy_grid's surface crosses (several in x and y).
+VoxelKey random_vertex(std::mt19937& rng) {
+    std::uniform_int_distribution<int> c(-16, 16), cz(-4, 4);
+    const int x = c(rng), y = c(rng);
+    return {x, y, cz(rng)};
+}
+
+std::string describe(const VoxelKey& v, int k) {
+    return "v=" + std::to_string(v.x()) + "," + std::to_string(v.y()) + "," + std::to_string(v.z()) + " k=" + std::to_string(k);
+}
+
 void expect_same_stats(const VoxelStats& a, const VoxelStats& b, double alpha, const std::string& what) {
     ASSERT_EQ(a.count, b.count) << what;
     if (a.count == 0) return;
@@ -45,10 +56,9 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
     const VoxelGrid grid = wavy_grid(alpha);
     const PackedVoxels packed(grid);
     std::mt19937 rng(5);
-    std::uniform_int_distribution<int> c(-16, 16), cz(-4, 4);
     for (int max_level : {5, 12}) {  // 12 > 8: a window of 5x5x5 blocks
         for (int trial = 0; trial < 200; ++trial) {
-            const VoxelKey v(c(rng), c(rng), cz(rng));
+            const VoxelKey v = random_vertex(rng);
             const NeighbourhoodWindow window(packed, vertex_block(v), max_level);
             Moments grown, slab;
             const Eigen::Vector3d p = v.cast<double>() * alpha;
@@ -57,8 +67,7 @@ TEST(NeighbourhoodWindow, SumsEqualMergedStatistics) {
             for (int k = 1; k <= max_level; ++k) {
                 window.grow(v, k, grown);
                 const VoxelStats reference = merge_neighbourhood(grid, v, k);
-                const std::string what = "v=" + std::to_string(v.x()) + "," + std::to_string(v.y()) + "," +
-                                         std::to_string(v.z()) + " k=" + std::to_string(k);
+                const std::string what = describe(v, k);
                 expect_same_stats(grown.to_stats(p), reference, alpha, what + " (grown)");
                 expect_same_stats(window.box(v, k).to_stats(p), reference, alpha, what + " (box)");
                 if (k < first_slab || k + std::max(e.x, e.y) > max_level) continue;
@@ -81,17 +90,15 @@ TEST(NeighbourhoodWindow, AResetWindowSumsItsNewBlock) {
     const VoxelGrid grid = wavy_grid(alpha);
     const PackedVoxels packed(grid);
     std::mt19937 rng(7);
-    std::uniform_int_distribution<int> c(-16, 16), cz(-4, 4);
     NeighbourhoodWindow window(packed, VoxelKey::Zero(), 13);  // radius 2, as with the default's radial slabs
     std::size_t compared = 0;
     for (int trial = 0; trial < 300; ++trial) {
-        const VoxelKey v(c(rng), c(rng), cz(rng));
+        const VoxelKey v = random_vertex(rng);
         window.reset(vertex_block(v));
         const int k = 1 + trial % 13;
         const VoxelStats reference = merge_neighbourhood(grid, v, k);
         compared += reference.count > 0;
-        expect_same_stats(window.box(v, k).to_stats(v.cast<double>() * alpha), reference, alpha,
-                          "v=" + std::to_string(v.x()) + "," + std::to_string(v.y()) + "," + std::to_string(v.z()) + " k=" + std::to_string(k));
+        expect_same_stats(window.box(v, k).to_stats(v.cast<double>() * alpha), reference, alpha, describe(v, k));
     }
     EXPECT_GT(compared, 150u);  // most boxes hold points: the comparison is not vacuous
 }
