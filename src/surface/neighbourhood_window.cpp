@@ -20,6 +20,7 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
 }
 
 namespace {
+using Map = BlockMap<std::int32_t>;
 // The address that marks a window block not looked up yet (never dereferenced).
 const PackedVoxels::Block kNotLookedUpBlock{};
 const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
@@ -29,26 +30,25 @@ NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const Voxel
     : voxels_(&voxels), alpha_(voxels.grid().voxel_size()) {
     // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
     // radius ceil(k/8) blocks of b.
-    radius_ = (max_level + BlockMap<std::int32_t>::kSize - 1) / BlockMap<std::int32_t>::kSize;
+    radius_ = (max_level + Map::kSize - 1) / Map::kSize;
     side_ = 2 * radius_ + 1;
     reset(vertex_block);
 }
 
 void NeighbourhoodWindow::reset(const VoxelKey& vertex_block) {
-    first_block_ = vertex_block.array() - radius_;
-    first_voxel_ = first_block_ * BlockMap<std::int32_t>::kSize;
+    first_voxel_ = (vertex_block.array() - radius_) * Map::kSize;
     blocks_.assign(static_cast<std::size_t>(side_ * side_ * side_), kNotLookedUp);
 }
 
 const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int bz) const {
     const PackedVoxels::Block*& b = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
-    if (b == kNotLookedUp) b = voxels_->find(first_block_ + VoxelKey(bx, by, bz));
+    if (b == kNotLookedUp) b = voxels_->find(Map::block_of(first_voxel_) + VoxelKey(bx, by, bz));
     return b;
 }
 
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
                                     Moments& acc, bool caps) const {
-    constexpr int B = BlockMap<std::int32_t>::kSize, m = B - 1;
+    constexpr int B = Map::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
     if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
         throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");

@@ -68,7 +68,6 @@ private:
     double alpha_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1
-    VoxelKey first_block_;  // smallest block key covered by the window
     VoxelKey first_voxel_;  // smallest voxel key covered by the window
     // side^3 blocks, x fastest: nullptr when the block holds no voxel, kNotLookedUp before the
     // first box that reaches it. Most boxes stay within the 3x3x3 blocks around the vertex block
