@@ -21,6 +21,14 @@ if [ $# -gt 0 ] && [ "$1" != "--" ]; then rounds=$1; shift; fi
 for bin in "$a" "$b"; do [ -x "$bin" ] || { echo "ab_bench: $bin is not an executable" >&2; exit 2; }; done
 case $rounds in '' | *[!0-9]* | 0) echo "ab_bench: ROUNDS must be a positive integer" >&2; exit 2 ;; esac
 
+# The table keys rows by the scan's file name: two scans with the same name (e.g. frame 000000 of
+# two sequences) would be merged into one row, so refuse them.
+dups=$(for arg in "$@"; do case $arg in -*) ;; *) [ -f "$arg" ] && basename -- "$arg" ;; esac; done | sort | uniq -d)
+if [ -n "$dups" ]; then
+    echo "ab_bench: scans with the same file name would share a row: $(echo $dups) (copy them under distinct names)" >&2
+    exit 2
+fi
+
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for ((r = 1; r <= rounds; ++r)); do
