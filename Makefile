@@ -33,9 +33,10 @@ demo: build
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-# The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (second build directory).
+# The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (second build directory),
+# with the portable scalar sums (LIDARSURF_SCALAR) where the main build has the SSE2 ones.
 sanitize: setup
-	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_SCALAR=ON -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS)
 

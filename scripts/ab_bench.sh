@@ -23,7 +23,9 @@ case $rounds in '' | *[!0-9]* | 0) echo "ab_bench: ROUNDS must be a positive int
 
 # The table keys rows by the scan's file name: two scans with the same name (e.g. frame 000000 of
 # two sequences) would be merged into one row, so refuse them.
-dups=$(for arg in "$@"; do case $arg in -*) ;; *) [ -f "$arg" ] && basename -- "$arg" ;; esac; done | sort | uniq -d)
+# (`if`, not `&&`: a last argument that is not a file, e.g. a thread count, must not fail the
+# loop under `set -e -o pipefail`.)
+dups=$(for arg in "$@"; do case $arg in -*) ;; *) if [ -f "$arg" ]; then basename -- "$arg"; fi ;; esac; done | sort | uniq -d)
 if [ -n "$dups" ]; then
     echo "ab_bench: scans with the same file name would share a row: $(echo $dups) (copy them under distinct names)" >&2
     exit 2

@@ -2,6 +2,15 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstddef>
+#include <memory>
+#include <string>
+
+// The SSE2 code (x86-64's baseline) unless LIDARSURF_SCALAR asks for the portable code.
+#if defined(__SSE2__) && !defined(LIDARSURF_SCALAR)
+#define LIDARSURF_SSE2 1
+#include <emmintrin.h>
+#endif
 
 #include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/errors.hpp"
@@ -21,13 +30,99 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
 
 namespace {
 using Map = BlockMap<std::int32_t>;
+
+// Moments being accumulated, in locals (registers) rather than through a Moments; each voxel is
+// added as raw moments about the reference point p (the header's formula):
+//   n += w, s1 += w d, s2 += V_M2 + w d d^T   (w = |V|, d = V_mu - p, upper triangle of s2).
+// With SSE2 the sums are pairs of doubles; every lane does the scalar code's operations in its
+// order (no fused multiply-add), so both give the same bits.
+static_assert(sizeof(PackedVoxels::Voxel) == 10 * sizeof(double) && offsetof(PackedVoxels::Voxel, zz) == 9 * sizeof(double),
+              "RawSums reads a record as 10 consecutive doubles");
+#if defined(LIDARSURF_SSE2)
+struct RawSums {
+    __m128d p0x, pyz;           // (0, px), (py, pz)
+    __m128d s1xy, s1zn;         // (s1x, s1y), (s1z, n)
+    __m128d sxx_xy, sxz_yy, syz_zz;
+    RawSums(const Moments& acc, const Eigen::Vector3d& p)
+        : p0x(_mm_set_pd(p.x(), 0.0)), pyz(_mm_set_pd(p.z(), p.y())), s1xy(_mm_set_pd(acc.s1.y(), acc.s1.x())),
+          s1zn(_mm_set_pd(acc.n, acc.s1.z())), sxx_xy(_mm_set_pd(acc.s2(0, 1), acc.s2(0, 0))),
+          sxz_yy(_mm_set_pd(acc.s2(1, 1), acc.s2(0, 2))), syz_zz(_mm_set_pd(acc.s2(2, 2), acc.s2(1, 2))) {}
+    void add(const PackedVoxels::Voxel& s) {
+        const double* r = &s.count;  // count, mx, my, mz, xx, xy, xz, yy, yz, zz
+        const __m128d wdx = _mm_sub_pd(_mm_loadu_pd(r), p0x);      // (w, dx): w - 0 = w
+        const __m128d dyz = _mm_sub_pd(_mm_loadu_pd(r + 2), pyz);  // (dy, dz)
+        const __m128d w = _mm_unpacklo_pd(wdx, wdx);
+        const __m128d dxy = _mm_shuffle_pd(wdx, dyz, 1);           // (dx, dy)
+        const __m128d wxy = _mm_mul_pd(w, dxy);                    // (wx, wy)
+        const __m128d wyz = _mm_mul_pd(w, dyz);                    // (wy, wz)
+        s1xy = _mm_add_pd(s1xy, wxy);
+        s1zn = _mm_add_pd(s1zn, _mm_shuffle_pd(wyz, w, 1));       // += (wz, w)
+        sxx_xy = _mm_add_pd(sxx_xy, _mm_add_pd(_mm_loadu_pd(r + 4), _mm_mul_pd(_mm_unpacklo_pd(wxy, wxy), dxy)));  // (xx + wx dx, xy + wx dy)
+        sxz_yy = _mm_add_pd(sxz_yy, _mm_add_pd(_mm_loadu_pd(r + 6), _mm_mul_pd(wxy, _mm_shuffle_pd(dyz, dyz, 1))));  // (xz + wx dz, yy + wy dy)
+        syz_zz = _mm_add_pd(syz_zz, _mm_add_pd(_mm_loadu_pd(r + 8), _mm_mul_pd(wyz, _mm_unpackhi_pd(dyz, dyz))));  // (yz + wy dz, zz + wz dz)
+    }
+    void store(Moments& acc) const {  // the scatter is symmetric
+        alignas(16) double v[10];
+        _mm_store_pd(v, s1xy);
+        _mm_store_pd(v + 2, s1zn);
+        _mm_store_pd(v + 4, sxx_xy);
+        _mm_store_pd(v + 6, sxz_yy);
+        _mm_store_pd(v + 8, syz_zz);
+        acc.n = v[3];
+        acc.s1 = {v[0], v[1], v[2]};
+        acc.s2 << v[4], v[5], v[6], v[5], v[7], v[8], v[6], v[8], v[9];
+    }
+};
+#else
+struct RawSums {
+    double px, py, pz;
+    double n, s1x, s1y, s1z, sxx, sxy, sxz, syy, syz, szz;
+    RawSums(const Moments& acc, const Eigen::Vector3d& p)
+        : px(p.x()), py(p.y()), pz(p.z()), n(acc.n), s1x(acc.s1.x()), s1y(acc.s1.y()), s1z(acc.s1.z()), sxx(acc.s2(0, 0)),
+          sxy(acc.s2(0, 1)), sxz(acc.s2(0, 2)), syy(acc.s2(1, 1)), syz(acc.s2(1, 2)), szz(acc.s2(2, 2)) {}
+    void add(const PackedVoxels::Voxel& s) {
+        const double w = s.count;
+        const double dx = s.mx - px, dy = s.my - py, dz = s.mz - pz;
+        const double wx = w * dx, wy = w * dy, wz = w * dz;
+        n += w;
+        s1x += wx, s1y += wy, s1z += wz;
+        sxx += s.xx + wx * dx, sxy += s.xy + wx * dy, sxz += s.xz + wx * dz;
+        syy += s.yy + wy * dy, syz += s.yz + wy * dz, szz += s.zz + wz * dz;
+    }
+    void store(Moments& acc) const {  // the scatter is symmetric
+        acc.n = n;
+        acc.s1 = {s1x, s1y, s1z};
+        acc.s2 << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+    }
+};
+#endif
+
+// Padding of the voxel list: a coordinate whose level, at least max(v, 201) - min(v, 200) >=
+// 201 - 71 for any vertex coordinate v <= K + 7 <= 71 (K <= 64), exceeds every level asked; real
+// coordinates are < 2 K + 7 <= 135.
+constexpr std::uint8_t kPad = 200;
+constexpr std::size_t kLanes = 16;
 // The address that marks a window block not looked up yet (never dereferenced).
 const PackedVoxels::Block kNotLookedUpBlock{};
 const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
+
+#if defined(LIDARSURF_SSE2)
+// L_a = max(v, i + 1) - min(v, i) for 16 coordinates i (unsigned bytes, no wrap: i + 1 <= 201).
+inline __m128i axis_level(const std::uint8_t* i, __m128i v) {
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(i));
+    return _mm_sub_epi8(_mm_max_epu8(v, _mm_add_epi8(c, _mm_set1_epi8(1))), _mm_min_epu8(v, c));
+}
+inline __m128i bytes(int value) { return _mm_set1_epi8(static_cast<char>(value)); }
+#else
+inline int axis_level(int i, int v) { return std::max(v, i + 1) - std::min(v, i); }
+#endif
 }  // namespace
 
-NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level)
-    : voxels_(&voxels), alpha_(voxels.grid().voxel_size()) {
+NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level, int cube_level)
+    : voxels_(&voxels), alpha_(voxels.grid().voxel_size()), max_level_(max_level), cube_level_(cube_level < 0 ? max_level : cube_level) {
+    if (max_level < 1 || max_level > 64 || cube_level_ < 1 || cube_level_ > max_level)
+        throw InvalidArgument("neighbourhood window: need 1 <= cube_level <= max_level <= 64 (got cube_level " + std::to_string(cube_level_) +
+                              ", max_level " + std::to_string(max_level) + ")");
     // H^k(v) = voxels [v-k, v+k-1]: for v in [8b, 8b+7] that is [8b-k, 8b+6+k], within
     // radius ceil(k/8) blocks of b.
     radius_ = (max_level + Map::kSize - 1) / Map::kSize;
@@ -36,14 +131,44 @@ NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const Voxel
 }
 
 void NeighbourhoodWindow::reset(const VoxelKey& vertex_block) {
+    vertex_block_ = vertex_block;
     first_voxel_ = (vertex_block.array() - radius_) * Map::kSize;
     blocks_.assign(static_cast<std::size_t>(side_ * side_ * side_), kNotLookedUp);
+    shared_ = nullptr;
+    list_ = nullptr;
+    levels_valid_ = false;
+}
+
+void NeighbourhoodWindow::share_list(SharedList* list) {
+    shared_ = list;
+    list_ = nullptr;
+    levels_valid_ = false;
 }
 
 const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int bz) const {
     const PackedVoxels::Block*& b = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
     if (b == kNotLookedUp) b = voxels_->find(Map::block_of(first_voxel_) + VoxelKey(bx, by, bz));
     return b;
+}
+
+template <typename F>
+void NeighbourhoodWindow::for_each_block(const VoxelKey& l, const VoxelKey& h, F&& f) const {
+    constexpr int B = Map::kSize, m = B - 1;
+    for (int bz = l.z() / B; bz <= h.z() / B; ++bz)
+        for (int by = l.y() / B; by <= h.y() / B; ++by)
+            for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
+                const PackedVoxels::Block* block = this->block(bx, by, bz);
+                if (!block) continue;
+                // The box's layers within this block that hold a voxel (most blocks of a lidar
+                // frame hold a few layers of ground or facade): the others are skipped.
+                const int z0 = std::max(l.z(), bz * B), z1 = std::min(h.z(), bz * B + m);
+                const unsigned layers = block->layers & ((0xffu >> (m - ((z1 - z0) & m))) << (z0 & m));
+                if (!layers) continue;
+                // The box within this block, as an 8x8 layer mask.
+                const int x0 = std::max(l.x(), bx * B), x1 = std::min(h.x(), bx * B + m);
+                const int y0 = std::max(l.y(), by * B), y1 = std::min(h.y(), by * B + m);
+                f(*block, VoxelKey(bx, by, bz), layers, layer_mask(x0 & m, x1 & m, y0 & m, y1 & m));
+            }
 }
 
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
@@ -55,59 +180,136 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
     // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z]
     // (every layer without caps).
     const VoxelKey il = l.array() + inset, ih = h.array() - inset;
-    const double px = p.x(), py = p.y(), pz = p.z();
-    double n = acc.n, s1x = acc.s1.x(), s1y = acc.s1.y(), s1z = acc.s1.z();
-    double sxx = acc.s2(0, 0), sxy = acc.s2(0, 1), sxz = acc.s2(0, 2), syy = acc.s2(1, 1), syz = acc.s2(1, 2), szz = acc.s2(2, 2);
-    for (int bz = l.z() / B; bz <= h.z() / B; ++bz)
-        for (int by = l.y() / B; by <= h.y() / B; ++by)
-            for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
-                const PackedVoxels::Block* block = this->block(bx, by, bz);
-                if (!block) continue;
-                // The box's layers within this block that hold a voxel (most blocks of a lidar
-                // frame hold a few layers of ground or facade): the others are skipped.
-                const int z0 = std::max(l.z(), bz * B), z1 = std::min(h.z(), bz * B + m);
-                unsigned layers = block->layers & ((0xffu >> (m - ((z1 - z0) & m))) << (z0 & m));
-                if (!layers) continue;
-                // The box within this block, in block coordinates, and its 8x8 layer masks.
-                const int x0 = std::max(l.x(), bx * B), x1 = std::min(h.x(), bx * B + m);
-                const int y0 = std::max(l.y(), by * B), y1 = std::min(h.y(), by * B + m);
-                const std::uint64_t full = layer_mask(x0 & m, x1 & m, y0 & m, y1 & m);
-                std::uint64_t ring = full;
-                const int hx0 = std::max(il.x(), x0), hx1 = std::min(ih.x(), x1);
-                const int hy0 = std::max(il.y(), y0), hy1 = std::min(ih.y(), y1);
-                if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
-                for (; layers; layers &= layers - 1) {
-                    const int z = bz * B + std::countr_zero(layers);
-                    const bool cap = inset == 0 || (caps && (z == l.z() || z == h.z()));
-                    std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(z & m)] & (cap ? full : ring);
-                    while (bits) {
-                        const int bit = std::countr_zero(bits);
-                        bits &= bits - 1;
-                        const PackedVoxels::Voxel& s = block->at(bit | ((z & m) << 6));
-                        const double w = s.count;
-                        const double dx = s.mx - px, dy = s.my - py, dz = s.mz - pz;
-                        const double wx = w * dx, wy = w * dy, wz = w * dz;
-                        n += w;
-                        s1x += wx, s1y += wy, s1z += wz;
-                        sxx += s.xx + wx * dx, sxy += s.xy + wx * dy, sxz += s.xz + wx * dz;
-                        syy += s.yy + wy * dy, syz += s.yz + wy * dz, szz += s.zz + wz * dz;
-                    }
-                }
+    RawSums sums(acc, p);
+    for_each_block(l, h, [&](const PackedVoxels::Block& block, const VoxelKey& b, unsigned layers, std::uint64_t full) {
+        std::uint64_t ring = full;
+        const int hx0 = std::max(il.x(), b.x() * B), hx1 = std::min(ih.x(), b.x() * B + m);
+        const int hy0 = std::max(il.y(), b.y() * B), hy1 = std::min(ih.y(), b.y() * B + m);
+        if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
+        for (; layers; layers &= layers - 1) {
+            const int layer = std::countr_zero(layers), z = b.z() * B + layer;
+            const bool cap = inset == 0 || (caps && (z == l.z() || z == h.z()));
+            for (std::uint64_t bits = (*block.occupancy)[static_cast<std::size_t>(layer)] & (cap ? full : ring); bits; bits &= bits - 1)
+                sums.add(block.at(std::countr_zero(bits) | (layer << 6)));
+        }
+    });
+    sums.store(acc);
+}
+
+NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
+    constexpr int B = Map::kSize, m = B - 1;
+    // The region [8b - K, 8b + 6 + K]^3, in window coordinates.
+    const VoxelKey first = vertex_block_ * B - first_voxel_;  // the vertex block's first vertex
+    const VoxelKey l = first.array() - cube_level_, h = first.array() + (6 + cube_level_);
+    // The region's layers (one pass over the blocks), then their voxels (one allocation per array).
+    layers_.clear();
+    std::size_t count = 0;
+    for_each_block(l, h, [&](const PackedVoxels::Block& block, const VoxelKey& b, unsigned layers, std::uint64_t full) {
+        for (; layers; layers &= layers - 1) {
+            const int layer = std::countr_zero(layers);
+            if (const std::uint64_t bits = (*block.occupancy)[static_cast<std::size_t>(layer)] & full) {
+                layers_.push_back({&block, b.x(), b.y(), b.z() * B + layer, bits});
+                count += static_cast<std::size_t>(std::popcount(bits));
             }
-    // Accumulated in locals (registers) rather than through `acc`; the scatter is symmetric.
-    acc.n = n;
-    acc.s1 = {s1x, s1y, s1z};
-    acc.s2 << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+        }
+    });
+    VoxelList list;
+    const std::size_t padded = (count + kLanes - 1) / kLanes * kLanes;
+    list.x.assign(padded, kPad);
+    list.y.assign(padded, kPad);
+    list.z.assign(padded, kPad);
+    list.records.assign(padded, nullptr);
+    std::size_t at = 0;
+    for (const LayerBits& layer : layers_) {
+        const auto z = static_cast<std::uint8_t>(layer.z - l.z());
+        const int x0 = layer.bx * B - l.x(), y0 = layer.by * B - l.y(), offset = (layer.z & m) << 6;
+        for (std::uint64_t bits = layer.bits; bits; bits &= bits - 1, ++at) {
+            const int bit = std::countr_zero(bits);
+            list.x[at] = static_cast<std::uint8_t>(x0 + (bit & m));
+            list.y[at] = static_cast<std::uint8_t>(y0 + (bit >> 3));
+            list.z[at] = z;
+            list.records[at] = &layer.block->at(bit | offset);
+        }
+    }
+    return list;
+}
+
+const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::list() const {
+    if (list_) return *list_;
+    if (!shared_) {
+        own_ = build_list();
+        list_ = &own_;
+        return own_;
+    }
+    const VoxelList* published = shared_->list_.load(std::memory_order_acquire);
+    if (!published) {
+        auto mine = std::make_unique<const VoxelList>(build_list());
+        if (shared_->list_.compare_exchange_strong(published, mine.get(), std::memory_order_acq_rel, std::memory_order_acquire))
+            published = mine.release();  // else `published` is another thread's identical list
+    }
+    list_ = published;
+    return *list_;
+}
+
+bool NeighbourhoodWindow::listed(const VoxelKey& v, int k) const {
+    return k >= 1 && k <= cube_level_ && Map::block_of(v) == vertex_block_;
+}
+
+const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
+    const VoxelList& list = this->list();
+    if (levels_valid_ && level_vertex_ == v) return levels_.data();
+    const VoxelKey r = (v - vertex_block_ * Map::kSize).array() + cube_level_;  // region coordinates, in [K, K + 7]
+    const std::size_t count = list.x.size();
+    if (levels_.size() < count) levels_.resize(count);
+#if defined(LIDARSURF_SSE2)
+    const __m128i vx = bytes(r.x()), vy = bytes(r.y()), vz = bytes(r.z());
+    for (std::size_t c = 0; c < count; c += kLanes) {
+        const __m128i level = _mm_max_epu8(axis_level(&list.x[c], vx), _mm_max_epu8(axis_level(&list.y[c], vy), axis_level(&list.z[c], vz)));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(&levels_[c]), level);
+    }
+#else
+    for (std::size_t c = 0; c < count; ++c)
+        levels_[c] = static_cast<std::uint8_t>(std::max({axis_level(list.x[c], r.x()), axis_level(list.y[c], r.y()), axis_level(list.z[c], r.z())}));
+#endif
+    level_vertex_ = v;
+    levels_valid_ = true;
+    return levels_.data();
+}
+
+void NeighbourhoodWindow::add_listed(const VoxelKey& v, int k, bool whole, Moments& acc) const {
+    const std::uint8_t* levels = this->levels(v);
+    const VoxelList& list = *list_;
+    RawSums sums(acc, v.cast<double>() * alpha_);
+    const std::size_t count = list.x.size();
+    const PackedVoxels::Voxel* const* records = list.records.data();
+#if defined(LIDARSURF_SSE2)
+    const __m128i kk = bytes(k);
+    for (std::size_t c = 0; c < count; c += kLanes) {
+        const __m128i level = _mm_loadu_si128(reinterpret_cast<const __m128i*>(levels + c));
+        const __m128i hit = whole ? _mm_cmpeq_epi8(_mm_min_epu8(level, kk), level) : _mm_cmpeq_epi8(level, kk);
+        for (auto bits = static_cast<unsigned>(_mm_movemask_epi8(hit)); bits; bits &= bits - 1)
+            sums.add(*records[c + static_cast<std::size_t>(std::countr_zero(bits))]);
+    }
+#else
+    for (std::size_t c = 0; c < count; ++c)
+        if (whole ? levels[c] <= k : levels[c] == k) sums.add(*records[c]);
+#endif
+    sums.store(acc);
 }
 
 void NeighbourhoodWindow::grow(const VoxelKey& v, int k, Moments& acc) const {
-    // H^k \ H^{k-1}: the box [v-k, v+k-1] without its interior [v-k+1, v+k-2] (empty for k = 1).
+    // H^k \ H^{k-1} = {L = k} (every listed voxel has L >= 1, so k = 1 gives H^1).
+    if (listed(v, k)) return add_listed(v, k, false, acc);
+    // Otherwise: the box [v-k, v+k-1] without its interior [v-k+1, v+k-2] (empty for k = 1).
     add_shell(v.array() - k, v.array() + (k - 1), k > 1 ? 1 : 0, v.cast<double>() * alpha_, acc);
 }
 
 Moments NeighbourhoodWindow::box(const VoxelKey& v, int k) const {
     Moments acc;
-    add_shell(v.array() - k, v.array() + (k - 1), 0, v.cast<double>() * alpha_, acc);
+    if (listed(v, k))
+        add_listed(v, k, true, acc);
+    else
+        add_shell(v.array() - k, v.array() + (k - 1), 0, v.cast<double>() * alpha_, acc);
     return acc;
 }
 

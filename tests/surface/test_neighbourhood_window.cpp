@@ -152,3 +152,65 @@ TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
     }
     EXPECT_GT(defined, compared / 4);  // the comparison is not vacuous
 }
+
+// The voxel list (cubes up to cube_level) adds the very records add_shell adds, in its order: a
+// window listing every level and one listing only H^1 (add_shell beyond) grow the same bits.
+TEST(NeighbourhoodWindow, ListedCubesEqualTheBlockWalkBitForBit) {
+    const double alpha = 0.2;
+    const VoxelGrid grid = wavy_grid(alpha);
+    const PackedVoxels packed(grid);
+    std::mt19937 rng(13);
+    std::size_t nonempty = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        const VoxelKey v = random_vertex(rng);
+        const NeighbourhoodWindow listed(packed, vertex_block(v), 13, 13), walked(packed, vertex_block(v), 13, 1);
+        Moments a, b;
+        for (int k = 1; k <= 13; ++k) {
+            listed.grow(v, k, a);
+            walked.grow(v, k, b);
+            ASSERT_EQ(a.n, b.n) << describe(v, k);
+            ASSERT_TRUE(a.s1 == b.s1 && a.s2 == b.s2) << describe(v, k);  // exact: same additions, same order
+            const Moments whole_a = listed.box(v, k), whole_b = walked.box(v, k);
+            ASSERT_TRUE(whole_a.n == whole_b.n && whole_a.s1 == whole_b.s1 && whole_a.s2 == whole_b.s2) << describe(v, k);
+        }
+        nonempty += a.n > 0;
+    }
+    EXPECT_GT(nonempty, 200u);
+}
+
+// Windows of one vertex block sharing its list (the fast path's windows on several threads):
+// whichever builds it, each sums what a window with its own list does, and the list is built once.
+TEST(NeighbourhoodWindow, WindowsSharingTheirBlocksListSumTheSame) {
+    const double alpha = 0.2;
+    const VoxelGrid grid = wavy_grid(alpha);
+    const PackedVoxels packed(grid);
+    std::mt19937 rng(17);
+    for (int trial = 0; trial < 50; ++trial) {
+        const VoxelKey v = random_vertex(rng);
+        NeighbourhoodWindow::SharedList shared;
+        NeighbourhoodWindow first(packed, VoxelKey::Zero(), 5), second(packed, vertex_block(v), 5);
+        first.reset(vertex_block(v));  // a reused window: reset() then share_list()
+        first.share_list(&shared);
+        second.share_list(&shared);
+        const NeighbourhoodWindow alone(packed, vertex_block(v), 5);
+        // Vertices of the same block in turn, through either window.
+        for (int i = 0; i < 8; ++i) {
+            const VoxelKey u = vertex_block(v) * 8 + VoxelKey(i, (3 * i) % 8, (5 * i) % 8);
+            const NeighbourhoodWindow& w = (i + trial) % 2 ? first : second;
+            for (int k = 1; k <= 5; ++k) {
+                const Moments a = w.box(u, k), b = alone.box(u, k);
+                ASSERT_TRUE(a.n == b.n && a.s1 == b.s1 && a.s2 == b.s2) << describe(u, k);
+                expect_same_stats(a.to_stats(u.cast<double>() * alpha), merge_neighbourhood(grid, u, k), alpha, describe(u, k));
+            }
+        }
+    }
+}
+
+TEST(NeighbourhoodWindow, RefusesInconsistentLevels) {
+    const VoxelGrid grid = wavy_grid(0.2);
+    const PackedVoxels packed(grid);
+    EXPECT_THROW(NeighbourhoodWindow(packed, VoxelKey::Zero(), 5, 6), InvalidArgument);   // cube_level > max_level
+    EXPECT_THROW(NeighbourhoodWindow(packed, VoxelKey::Zero(), 0), InvalidArgument);
+    EXPECT_THROW(NeighbourhoodWindow(packed, VoxelKey::Zero(), 65), InvalidArgument);  // region coordinates would not fit a byte
+    EXPECT_NO_THROW(NeighbourhoodWindow(packed, VoxelKey::Zero(), 64, 64));
+}

@@ -10,6 +10,22 @@
 // which is Chan's merge (voxel_stats.cpp) expanded: no division per voxel, and small coordinates
 // (|d| <= k alpha) so no loss of precision. The result equals merge_neighbourhood() up to
 // rounding (tests/surface/test_neighbourhood_window.cpp).
+//
+// The cubes H^k(v) (grow, box) with k <= cube_level = K go through a voxel list instead
+// (session 16): the occupied voxels of the region every such cube of the block's vertices lies
+// in, [8b - K, 8b + 6 + K]^3, listed once as region coordinates (bytes) and records, in the
+// order add_shell meets them (blocks z, y, x, then layers, then rows). Per vertex, one SIMD pass
+// gives each listed voxel its level, the smallest k with i in H^k(v) = [v - k, v + k - 1]:
+//   L(i) = max over the axes a of  max(v_a, i_a + 1) - min(v_a, i_a).
+// The shell H^k \ H^{k-1} is then {L = k} and H^k is {L <= k}, found 16 voxels per compare and
+// added in list order: the very additions, in the very order, of add_shell (so the same bits),
+// without its per-block and per-layer bookkeeping, which was most of a shell's cost on lidar
+// frames (docs/benchmarks.md, session 16). The list depends only on the voxels, the vertex block
+// and K, so the windows of one vertex block, on any thread, may share it (SharedList). Slabs
+// keep add_shell: a list of their wider region (radial extensions) cost more to build than the
+// bookkeeping it saved.
+#include <atomic>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -32,12 +48,39 @@ struct Moments {
 
 class NeighbourhoodWindow {
 public:
+    /// The occupied voxels of the cube region (see above), padded to a multiple of 16 with
+    /// coordinates beyond every level.
+    struct VoxelList {
+        std::vector<std::uint8_t> x, y, z;
+        std::vector<const PackedVoxels::Voxel*> records;
+    };
+    /// The voxel list of one vertex block, for the windows of that block to share, whatever their
+    /// thread: the first window that needs it builds and publishes it (if two race, one copy is
+    /// kept). Owns the published list.
+    class SharedList {
+    public:
+        SharedList() = default;
+        SharedList(const SharedList&) = delete;
+        SharedList& operator=(const SharedList&) = delete;
+        ~SharedList() { delete list_.load(std::memory_order_relaxed); }
+
+    private:
+        friend class NeighbourhoodWindow;
+        std::atomic<const VoxelList*> list_{nullptr};
+    };
+
     /// Window for the vertices of vertex block `vertex_block` (vertices 8 b .. 8 b + 7 per axis)
-    /// and levels up to `max_level`. The sums cache their block lookups in the window, so one
-    /// window must not be used by two threads at once (`voxels` itself is thread-safe).
-    NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level);
-    /// Makes this the window of another vertex block (same voxels and levels; keeps the storage).
+    /// and levels up to `max_level` (<= 64). The sums cache their block lookups and list in the
+    /// window, so one window must not be used by two threads at once (`voxels` itself is
+    /// thread-safe). Cubes up to `cube_level` (in [1, max_level]; default max_level) use the voxel
+    /// list, larger ones add_shell.
+    NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level, int cube_level = -1);
+    /// Makes this the window of another vertex block (same voxels and levels; keeps the storage;
+    /// stops sharing its list).
     void reset(const VoxelKey& vertex_block);
+    /// Makes the window take its voxel list from `list` (that of its vertex block, with the same
+    /// voxels and cube_level), or publish there the one it builds, until the next reset().
+    void share_list(SharedList* list);
 
     /// Adds the voxels of H^k(v) \ H^{k-1}(v) (all of H^1 for k = 1) to `acc`, whose reference
     /// point is v's position. v must be in the window's vertex block and k <= max_level.
@@ -57,23 +100,54 @@ public:
 private:
     // Adds the voxels of the box lo <= key <= hi (inclusive) to acc, without its interior box
     // [lo + inset, hi - inset] when inset > 0 (a shell; with `caps` false the hole runs through
-    // every layer: the x-y ring of a slab). One pass over the window blocks, one 64-bit mask per
-    // 8x8 layer.
+    // every layer: the x-y ring of a slab). The general path, for what the list does not cover.
     void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc, bool caps = true) const;
-
+    // Calls f(block, b, layers, full) for each window block b = (bx, by, bz) whose layers within
+    // the box [l, h] (window coordinates) hold voxels, in the order z, y, x: `layers` has bit z
+    // set for those layers, `full` is the box's 8x8 layer mask in the block (bit x + 8 y).
+    template <typename F>
+    void for_each_block(const VoxelKey& l, const VoxelKey& h, F&& f) const;
     // Block (bx, by, bz) of the window, looked up on first use.
     const PackedVoxels::Block* block(int bx, int by, int bz) const;
 
+    // The voxel list (building it, or taking it from the shared list, on first use).
+    const VoxelList& list() const;
+    VoxelList build_list() const;
+    // Whether H^k(v) goes through the voxel list.
+    bool listed(const VoxelKey& v, int k) const;
+    // The level of each listed voxel for v (computed once per vertex).
+    const std::uint8_t* levels(const VoxelKey& v) const;
+    // Adds the listed voxels with level k (whole: level <= k) to acc, in list order.
+    void add_listed(const VoxelKey& v, int k, bool whole, Moments& acc) const;
+
     const PackedVoxels* voxels_;
     double alpha_;
+    int max_level_;
+    int cube_level_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1
+    VoxelKey vertex_block_;
     VoxelKey first_voxel_;  // smallest voxel key covered by the window
     // side^3 blocks, x fastest: nullptr when the block holds no voxel, kNotLookedUp before the
     // first box that reaches it. Most boxes stay within the 3x3x3 blocks around the vertex block
     // (the 5x5x5 of the radial slabs are reached along one axis), and a window is built per
     // vertex block a task meets, so looking all of them up front cost ~9 % of a KITTI frame.
     mutable std::vector<const PackedVoxels::Block*> blocks_;
+
+    SharedList* shared_ = nullptr;          // where the list is shared (nullptr: own_)
+    mutable const VoxelList* list_ = nullptr;  // the list in use, nullptr until first use
+    mutable VoxelList own_;                 // the list built for this window alone
+    // A layer of a block that holds voxels of the region (build_list's scratch).
+    struct LayerBits {
+        const PackedVoxels::Block* block;
+        int bx, by, z;
+        std::uint64_t bits;
+    };
+    mutable std::vector<LayerBits> layers_;
+    // The levels for vertex level_vertex_, while levels_valid_.
+    mutable std::vector<std::uint8_t> levels_;
+    mutable VoxelKey level_vertex_;
+    mutable bool levels_valid_ = false;
 };
 
 }  // namespace lidarsurf
