@@ -2,9 +2,10 @@
 // What a plane fit needs of a 3x3 covariance, without trigonometry (issue 5): its eigenvalues
 // and the eigenvector of the smallest, the normal. Shifted by the mean eigenvalue T/3 (as Eigen's
 // computeDirect), lambda3 - T/3 is the smallest root of the trace-free matrix's characteristic
-// polynomial, found by Newton's method from -T/3, where the polynomial is increasing and concave,
-// so the iterates rise monotonically to it; for a planar neighbourhood (lambda3 << lambda2) the
-// start is already within lambda3 of it. lambda1 and lambda2 are the roots of the remaining
+// polynomial, found by Newton's method from left of it, where the polynomial is increasing and
+// concave, so the iterates rise monotonically to it: from det(C) / M(C) - T/3 (M: the sum of C's
+// principal 2x2 minors), within about lambda3^2 / lambda2 of it, else from -T/3, within lambda3
+// (3.4 steps per fit on a KITTI frame). lambda1 and lambda2 are the roots of the remaining
 // quadratic, e3 the kernel of C - lambda3 I (the cross product of its two most independent rows).
 // Eigen's computeDirect spends most of its time in atan2 and sincos for the same values, and on
 // two more eigenvectors a plane does not need.
