@@ -25,6 +25,21 @@ namespace lidarsurf {
 
 namespace {
 
+// The Morton (z-order) code of a block key: the bits of its coordinates (offset to be
+// non-negative, 21 bits each) interleaved, so that keys close in space are mostly close in order.
+std::uint64_t morton_code(const VoxelKey& key) {
+    auto spread = [](std::int32_t c) {
+        std::uint64_t v = static_cast<std::uint64_t>(static_cast<std::uint32_t>(c) + (1u << 20)) & 0x1fffffu;
+        v = (v | v << 32) & 0x1f00000000ffffull;
+        v = (v | v << 16) & 0x1f0000ff0000ffull;
+        v = (v | v << 8) & 0x100f00f00f00f00full;
+        v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+        v = (v | v << 2) & 0x1249249249249249ull;
+        return v;
+    };
+    return spread(key.x()) | spread(key.y()) << 1 | spread(key.z()) << 2;
+}
+
 VoxelKey corner(const VoxelKey& base, int c) { return base + VoxelKey(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
 // The corners of a cube whose coordinates are all even / all odd: the base rounded up to even /
 // to odd per axis. Every cube has exactly one of each; they are the lazy evaluation's probes.
@@ -416,7 +431,17 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // cubes it leads to are visited serially, in block order.
     const int d = config.seed_dilation;
     {
-        const std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);
+        std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);
+        // In Morton order of the block keys, so that the blocks a task takes (and the two
+        // threads' ranges) are compact in space and share the voxel records their windows read.
+        {
+            std::vector<std::pair<std::uint64_t, std::size_t>> order(seeds.size());
+            for (std::size_t i = 0; i < seeds.size(); ++i) order[i] = {morton_code(seeds[i].block), i};
+            std::sort(order.begin(), order.end());
+            std::vector<MaskedBlock> sorted(seeds.size());
+            for (std::size_t i = 0; i < seeds.size(); ++i) sorted[i] = seeds[order[i].second];
+            seeds = std::move(sorted);
+        }
         std::vector<std::uint32_t> visited_block(seeds.size());
         for (std::size_t i = 0; i < seeds.size(); ++i) {
             visited_block[i] = search.visited().block_index(seeds[i].block);
