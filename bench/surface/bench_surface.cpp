@@ -2,6 +2,9 @@
 // reference and as the fast path, on the vertices of the town frame's seeded surface.
 #include <benchmark/benchmark.h>
 
+#include <map>
+#include <tuple>
+
 #include "bench_data.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
@@ -38,19 +41,27 @@ void BM_NeighbourhoodReference(benchmark::State& state) {
 }
 BENCHMARK(BM_NeighbourhoodReference)->Unit(benchmark::kMillisecond);
 
-// ... and raw moments over the occupancy bits of a NeighbourhoodWindow (fast path).
+// ... and raw moments through a NeighbourhoodWindow (fast path): Arg 0 walks the window's blocks
+// for every shell above H^1 (the pre-session-16 sums), Arg 1 reads the cube voxel list, one per
+// vertex block shared by that block's windows and built on first use, as compute_seeded_tsdf does.
 void BM_NeighbourhoodWindow(benchmark::State& state) {
     const PackedVoxels packed(grid());
-    for (auto _ : state)
+    const bool listed = state.range(0) == 1;
+    for (auto _ : state) {
+        std::map<std::tuple<int, int, int>, NeighbourhoodWindow::SharedList> lists;  // nodes stay in place
         for (const VoxelKey& v : vertices()) {
-            const NeighbourhoodWindow w(packed, BlockMap<std::int32_t>::block_of(v), 5);
+            const VoxelKey b = BlockMap<std::int32_t>::block_of(v);
+            NeighbourhoodWindow w(packed, b, 5, listed ? 5 : 1);
+            if (listed) w.share_list(&lists[{b.x(), b.y(), b.z()}]);
             Moments acc;
             for (int k = 1; k <= 5; ++k) w.grow(v, k, acc);
             benchmark::DoNotOptimize(acc.n);
         }
+    }
     state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(vertices().size()));
+    state.SetLabel(listed ? "voxel list" : "block walk");
 }
-BENCHMARK(BM_NeighbourhoodWindow)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NeighbourhoodWindow)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Plane (Eq. 1-2) + Gaussian confidence (Eq. 3) on H^3 of each vertex, per eigen solver.
 void BM_PlaneAndConfidence(benchmark::State& state) {
