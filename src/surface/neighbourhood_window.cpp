@@ -102,6 +102,12 @@ struct RawSums {
 // coordinates are < 2 K + 7 <= 135.
 constexpr std::uint8_t kPad = 200;
 constexpr std::size_t kLanes = 16;
+// A layer of a window block that holds voxels of the list's region (build_list).
+struct LayerBits {
+    const PackedVoxels::Block* block;
+    int bx, by, z;
+    std::uint64_t bits;
+};
 // The address that marks a window block not looked up yet (never dereferenced).
 const PackedVoxels::Block kNotLookedUpBlock{};
 const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
@@ -202,13 +208,13 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     const VoxelKey first = vertex_block_ * B - first_voxel_;  // the vertex block's first vertex
     const VoxelKey l = first.array() - cube_level_, h = first.array() + (6 + cube_level_);
     // The region's layers (one pass over the blocks), then their voxels (one allocation per array).
-    layers_.clear();
+    std::vector<LayerBits> layers;
     std::size_t count = 0;
-    for_each_block(l, h, [&](const PackedVoxels::Block& block, const VoxelKey& b, unsigned layers, std::uint64_t full) {
-        for (; layers; layers &= layers - 1) {
-            const int layer = std::countr_zero(layers);
+    for_each_block(l, h, [&](const PackedVoxels::Block& block, const VoxelKey& b, unsigned in_box, std::uint64_t full) {
+        for (; in_box; in_box &= in_box - 1) {
+            const int layer = std::countr_zero(in_box);
             if (const std::uint64_t bits = (*block.occupancy)[static_cast<std::size_t>(layer)] & full) {
-                layers_.push_back({&block, b.x(), b.y(), b.z() * B + layer, bits});
+                layers.push_back({&block, b.x(), b.y(), b.z() * B + layer, bits});
                 count += static_cast<std::size_t>(std::popcount(bits));
             }
         }
@@ -220,7 +226,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     list.z.assign(padded, kPad);
     list.records.assign(padded, nullptr);
     std::size_t at = 0;
-    for (const LayerBits& layer : layers_) {
+    for (const LayerBits& layer : layers) {
         const auto z = static_cast<std::uint8_t>(layer.z - l.z());
         const int x0 = layer.bx * B - l.x(), y0 = layer.by * B - l.y(), offset = (layer.z & m) << 6;
         for (std::uint64_t bits = layer.bits; bits; bits &= bits - 1, ++at) {
@@ -278,7 +284,7 @@ const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
 
 void NeighbourhoodWindow::add_listed(const VoxelKey& v, int k, bool whole, Moments& acc) const {
     const std::uint8_t* levels = this->levels(v);
-    const VoxelList& list = *list_;
+    const VoxelList& list = this->list();
     RawSums sums(acc, v.cast<double>() * alpha_);
     const std::size_t count = list.x.size();
     const PackedVoxels::Voxel* const* records = list.records.data();

@@ -32,9 +32,9 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
     if (p > 0) return std::nullopt;  // a root below l: c is not PSD
     // A closer start, still left of the root: for a PSD c, det(c) / M(c) (M: the sum of c's
     // principal 2x2 minors) = l1 l2 l3 / (l1 l2 + l1 l3 + l2 l3) <= lambda3, short of it by about
-    // lambda3^2 (l1 + l2) / (l1 l2): two Newton steps fewer for a planar neighbourhood (5.35 steps
-    // per fit from -T/3 on KITTI 000000, docs/benchmarks.md, session 16). Rounding may put it
-    // right of the root (p > 0 there): then the start stays -T/3.
+    // lambda3^2 (l1 + l2) / (l1 l2): one Newton step fewer on lidar neighbourhoods (5.35 -> 4.35
+    // steps per fit on KITTI 000000; the early stop below saves another, docs/benchmarks.md,
+    // session 16). Rounding may put it right of the root (p > 0 there): then the start stays -T/3.
     {
         const double cxx = c(0, 0), cxy = c(0, 1), cxz = c(0, 2), cyy = c(1, 1), cyz = c(1, 2), czz = c(2, 2);
         const double minors = cxx * cyy - cxy * cxy + cxx * czz - cxz * cxz + cyy * czz - cyz * cyz;

@@ -137,13 +137,6 @@ private:
     SharedList* shared_ = nullptr;          // where the list is shared (nullptr: own_)
     mutable const VoxelList* list_ = nullptr;  // the list in use, nullptr until first use
     mutable VoxelList own_;                 // the list built for this window alone
-    // A layer of a block that holds voxels of the region (build_list's scratch).
-    struct LayerBits {
-        const PackedVoxels::Block* block;
-        int bx, by, z;
-        std::uint64_t bits;
-    };
-    mutable std::vector<LayerBits> layers_;
     // The levels for vertex level_vertex_, while levels_valid_.
     mutable std::vector<std::uint8_t> levels_;
     mutable VoxelKey level_vertex_;
