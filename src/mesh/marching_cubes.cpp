@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
+#include <cstdint>
 #include <memory>
 
 #include <Eigen/Geometry>
@@ -27,28 +29,66 @@ constexpr std::array<std::array<int, 4>, 6> kFaces{{
 }};
 
 // Axis (0, 1, 2) of the cube edge joining adjacent corners a and b.
-int edge_axis(int a, int b) { return (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2); }
+constexpr int edge_axis(int a, int b) { return (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2); }
 
-// Bit mask of the faces (bit f for kFaces[f]) that contain cube edge e: filled on first use.
-const std::array<std::uint8_t, 12>& edge_faces();
-
-// Local index (0..11) of the cube edge joining corners a and b (adjacent corners).
-int edge_index(int a, int b) {
+// Local index (0..11) of the cube edge joining corners a and b (adjacent corners): axis * 4 +
+// the position of its lower corner across the axis.
+constexpr int edge_index(int a, int b) {
     const int lo = a < b ? a : b;
     const int axis = edge_axis(a, b);
-    const VoxelKey o = corner_offset(lo);
-    const int rest = axis == 0 ? o.y() + 2 * o.z() : (axis == 1 ? o.x() + 2 * o.z() : o.x() + 2 * o.y());
+    const int ox = lo & 1, oy = (lo >> 1) & 1, oz = (lo >> 2) & 1;
+    const int rest = axis == 0 ? oy + 2 * oz : (axis == 1 ? ox + 2 * oz : ox + 2 * oy);
     return axis * 4 + rest;
 }
 
-const std::array<std::uint8_t, 12>& edge_faces() {
-    static const std::array<std::uint8_t, 12> masks = [] {
-        std::array<std::uint8_t, 12> m{};
+// What the corners' signs alone say about a cube, for each of the 256 sign patterns (bit c set
+// when corner c is negative), computed once; process_cube reads it instead of walking the faces.
+struct CubeCase {
+    // next[e]: the edge where the boundary of the surface patch goes after edge e, for the faces
+    // the surface crosses twice; -1 otherwise (and on the faces it crosses four times).
+    std::array<std::int8_t, 12> next;
+    std::uint8_t ambiguous = 0;  // bit f: face f is crossed four times (asymptotic decider)
+};
+struct CubeTables {
+    std::array<std::int8_t, 12> edge_lo{}, edge_hi{};  // the corners joined by edge e (lo < hi)
+    std::array<std::uint8_t, 12> edge_faces{};  // bit f: kFaces[f] contains edge e
+    std::array<std::array<std::int8_t, 4>, 6> face_edges{};  // the edges of face f, in its CCW order
+    std::array<CubeCase, 256> cases{};
+};
+const CubeTables& cube_tables() {
+    static const CubeTables tables = [] {
+        CubeTables t;
         for (int f = 0; f < 6; ++f)
-            for (int i = 0; i < 4; ++i) m[edge_index(kFaces[f][i], kFaces[f][(i + 1) % 4])] |= std::uint8_t(1u << f);
-        return m;
+            for (int m = 0; m < 4; ++m) {
+                const int a = kFaces[f][m], b = kFaces[f][(m + 1) % 4], e = edge_index(a, b);
+                t.edge_lo[e] = static_cast<std::int8_t>(std::min(a, b));
+                t.edge_hi[e] = static_cast<std::int8_t>(std::max(a, b));
+                t.edge_faces[e] |= static_cast<std::uint8_t>(1u << f);
+                t.face_edges[f][m] = static_cast<std::int8_t>(e);
+            }
+        for (int config = 0; config < 256; ++config) {
+            CubeCase& c = t.cases[config];
+            c.next.fill(-1);
+            auto neg = [&](int corner) { return ((config >> corner) & 1) != 0; };
+            for (int f = 0; f < 6; ++f) {
+                int edges[4], n_cross = 0, first_enters = 0;  // crossings in CCW order
+                for (int m = 0; m < 4; ++m) {
+                    const int a = kFaces[f][m], b = kFaces[f][(m + 1) % 4];
+                    if (neg(a) == neg(b)) continue;
+                    if (n_cross == 0) first_enters = neg(b);  // walking a -> b enters the negative region
+                    edges[n_cross++] = t.face_edges[f][m];
+                }
+                if (n_cross == 2) {
+                    const int i_enter = first_enters ? 0 : 1;
+                    c.next[edges[i_enter]] = static_cast<std::int8_t>(edges[1 - i_enter]);
+                } else if (n_cross == 4) {
+                    c.ambiguous |= static_cast<std::uint8_t>(1u << f);
+                }
+            }
+        }
+        return t;
     }();
-    return masks;
+    return tables;
 }
 
 // Lattice-global identity of a mesh vertex: the edge (min endpoint, axis 0..2) it lies on, or the
@@ -74,46 +114,29 @@ public:
 
     void process_cube(const VoxelKey& base) {
         std::array<const VertexSample*, 8> s{};
-        std::array<bool, 8> neg{};
-        int negatives = 0;
+        unsigned config = 0;  // bit c: corner c is negative (zero counts as positive: outside)
         for (int c = 0; c < 8; ++c) {
             s[c] = lookup_.find(base + corner_offset(c));
             if (!s[c]) return;  // only cubes whose 8 corners are defined
-            neg[c] = s[c]->tsdf < 0;  // zero counts as positive (outside)
-            negatives += neg[c];
+            config |= static_cast<unsigned>(s[c]->tsdf < 0) << c;
         }
-        if (negatives == 0 || negatives == 8) return;
+        if (config == 0 || config == 255) return;
 
-        // next[e]: the edge where the surface patch boundary goes after edge e.
-        std::array<int, 12> next;
-        next.fill(-1);
-        std::array<int, 12> edge_a{}, edge_b{};
-        for (const auto& q : kFaces) {
-            int order[4], n_cross = 0;  // crossing positions in CCW order: +1 enter, -1 exit
-            int edges[4];
-            for (int m = 0; m < 4; ++m) {
-                const int a = q[m], b = q[(m + 1) % 4];
-                if (neg[a] == neg[b]) continue;
-                const int e = edge_index(a, b);
-                edge_a[e] = a < b ? a : b;
-                edge_b[e] = a < b ? b : a;
-                edges[n_cross] = e;
-                order[n_cross] = neg[b] ? +1 : -1;  // walking a -> b: entering the negative region?
-                ++n_cross;
-            }
-            if (n_cross == 2) {
-                const int i_enter = order[0] > 0 ? 0 : 1;
-                next[edges[i_enter]] = edges[1 - i_enter];
-            } else if (n_cross == 4) {
-                // Asymptotic decider: value of the bilinear interpolant at its saddle point.
-                const double f0 = s[q[0]]->tsdf, f1 = s[q[1]]->tsdf, f2 = s[q[2]]->tsdf, f3 = s[q[3]]->tsdf;
-                const double saddle = (f0 * f2 - f1 * f3) / (f0 + f2 - f1 - f3);
-                const bool negatives_connected = saddle < 0;
-                for (int p = 0; p < 4; ++p) {
-                    if (order[p] < 0) continue;
-                    const int partner = negatives_connected ? (p + 3) % 4 : (p + 1) % 4;
-                    next[edges[p]] = edges[partner];
-                }
+        const CubeTables& t = tables_;
+        std::array<std::int8_t, 12> next = t.cases[config].next;
+        for (unsigned ambiguous = t.cases[config].ambiguous; ambiguous; ambiguous &= ambiguous - 1) {
+            // A face crossed four times: the asymptotic decider (value of the bilinear interpolant
+            // at its saddle point) tells which pairs of crossings the patch boundary joins.
+            const int f = std::countr_zero(ambiguous);
+            const auto& q = kFaces[static_cast<std::size_t>(f)];
+            const double f0 = s[q[0]]->tsdf, f1 = s[q[1]]->tsdf, f2 = s[q[2]]->tsdf, f3 = s[q[3]]->tsdf;
+            const double saddle = (f0 * f2 - f1 * f3) / (f0 + f2 - f1 - f3);
+            const bool negatives_connected = saddle < 0;
+            const auto& edges = t.face_edges[static_cast<std::size_t>(f)];
+            for (int p = 0; p < 4; ++p) {
+                if (!((config >> q[(p + 1) % 4]) & 1)) continue;  // crossing p exits the negative region
+                const int partner = negatives_connected ? (p + 3) % 4 : (p + 1) % 4;
+                next[edges[p]] = edges[partner];
             }
         }
 
@@ -126,7 +149,8 @@ public:
             for (int e = start; !visited[e]; e = next[e]) {
                 visited[e] = true;
                 loop_edges[len] = e;
-                loop[len++] = vertex_on_edge(base, edge_a[e], edge_b[e], *s[edge_a[e]], *s[edge_b[e]]);
+                const int a = t.edge_lo[e], b = t.edge_hi[e];
+                loop[len++] = vertex_on_edge(base, a, b, *s[a], *s[b]);
             }
             triangulate_loop(loop, loop_edges, len);
         }
@@ -152,7 +176,7 @@ private:
     // or a spoke: two triangles of this fan). If every fan has a face chord (rare, complex loops),
     // the loop is fanned around an added centroid vertex instead.
     void triangulate_loop(const std::array<std::uint32_t, 12>& loop, const std::array<int, 12>& edges, int len) {
-        const auto& faces = edge_faces();
+        const auto& faces = tables_.edge_faces;
         for (int s0 = 0; s0 < len; ++s0) {
             bool ok = true;
             for (int j = 2; j + 1 < len && ok; ++j) ok = (faces[edges[s0]] & faces[edges[(s0 + j) % len]]) == 0;
@@ -218,6 +242,7 @@ private:
     }
 
     const TsdfField& field_;
+    const CubeTables& tables_ = cube_tables();
     VertexPlacement placement_;
     Mesh mesh_;
     TsdfField::Accessor lookup_;
