@@ -6,6 +6,7 @@
 #include <cstring>
 #include <iomanip>
 #include <string>
+#include <vector>
 
 #include "byte_reader.hpp"
 #include "lidarsurf/core/errors.hpp"
@@ -25,11 +26,11 @@ MeshFormat parse_mesh_format(std::string_view name) {
 
 namespace {
 
+// Appends v's bytes at `at` (PLY binary_little_endian; the supported targets are little endian).
 template <typename T>
-void put(std::ostream& out, T v) {
-    char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));  // PLY binary_little_endian; the supported targets are little endian
-    out.write(b, sizeof(T));
+char* put(char* at, T v) {
+    std::memcpy(at, &v, sizeof(T));
+    return at + sizeof(T);
 }
 
 // Float32 keeps ~1e-3 m at 1e4 m; beyond that, vertices are written as double.
@@ -54,30 +55,38 @@ void write_ply(const Mesh& mesh, std::ostream& out, bool binary) {
     if (has_k) out << "property uchar level\n";
     if (has_c) out << "property float confidence\n";
     out << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
-    if (!binary) out << std::setprecision(dbl ? 15 : 9);
+    if (binary) {
+        // The body is laid out in memory, then written at once: a stream write per value cost
+        // ~12 ms per KITTI frame (about 1 M calls), more than marching cubes.
+        const std::size_t vertex_bytes = 3 * (dbl ? sizeof(double) : sizeof(float)) + (has_n ? 3 * sizeof(float) : 0) +
+                                         (has_k ? sizeof(std::uint8_t) : 0) + (has_c ? sizeof(float) : 0);
+        const std::size_t face_bytes = sizeof(std::uint8_t) + 3 * sizeof(std::int32_t);
+        std::vector<char> body(mesh.vertices.size() * vertex_bytes + mesh.triangles.size() * face_bytes);
+        char* at = body.data();
+        for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+            const auto& v = mesh.vertices[i];
+            for (int a = 0; a < 3; ++a) at = dbl ? put<double>(at, v[a]) : put<float>(at, static_cast<float>(v[a]));
+            if (has_n) for (int a = 0; a < 3; ++a) at = put<float>(at, mesh.normals[i][a]);
+            if (has_k) at = put<std::uint8_t>(at, mesh.levels[i]);
+            if (has_c) at = put<float>(at, mesh.confidence[i]);
+        }
+        for (const auto& tri : mesh.triangles) {
+            at = put<std::uint8_t>(at, 3);
+            for (auto i : tri) at = put<std::int32_t>(at, static_cast<std::int32_t>(i));
+        }
+        out.write(body.data(), static_cast<std::streamsize>(body.size()));
+        return;
+    }
+    out << std::setprecision(dbl ? 15 : 9);
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
         const auto& v = mesh.vertices[i];
-        if (binary) {
-            for (int a = 0; a < 3; ++a) dbl ? put<double>(out, v[a]) : put<float>(out, static_cast<float>(v[a]));
-            if (has_n) for (int a = 0; a < 3; ++a) put<float>(out, mesh.normals[i][a]);
-            if (has_k) put<std::uint8_t>(out, mesh.levels[i]);
-            if (has_c) put<float>(out, mesh.confidence[i]);
-        } else {
-            out << v.x() << ' ' << v.y() << ' ' << v.z();
-            if (has_n) out << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
-            if (has_k) out << ' ' << static_cast<int>(mesh.levels[i]);
-            if (has_c) out << ' ' << mesh.confidence[i];
-            out << '\n';
-        }
+        out << v.x() << ' ' << v.y() << ' ' << v.z();
+        if (has_n) out << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
+        if (has_k) out << ' ' << static_cast<int>(mesh.levels[i]);
+        if (has_c) out << ' ' << mesh.confidence[i];
+        out << '\n';
     }
-    for (const auto& tri : mesh.triangles) {
-        if (binary) {
-            put<std::uint8_t>(out, 3);
-            for (auto i : tri) put<std::int32_t>(out, static_cast<std::int32_t>(i));
-        } else {
-            out << "3 " << tri[0] << ' ' << tri[1] << ' ' << tri[2] << '\n';
-        }
-    }
+    for (const auto& tri : mesh.triangles) out << "3 " << tri[0] << ' ' << tri[1] << ' ' << tri[2] << '\n';
 }
 
 void write_obj(const Mesh& mesh, std::ostream& out) {
