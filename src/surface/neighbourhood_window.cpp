@@ -151,10 +151,15 @@ void NeighbourhoodWindow::share_list(SharedList* list) {
     levels_valid_ = false;
 }
 
-const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int bz) const {
+inline const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int bz) const {
     const PackedVoxels::Block*& b = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
-    if (b == kNotLookedUp) b = voxels_->find(Map::block_of(first_voxel_) + VoxelKey(bx, by, bz));
+    if (b == kNotLookedUp) [[unlikely]]
+        b = look_up(bx, by, bz);
     return b;
+}
+
+const PackedVoxels::Block* NeighbourhoodWindow::look_up(int bx, int by, int bz) const {
+    return voxels_->find(Map::block_of(first_voxel_) + VoxelKey(bx, by, bz));
 }
 
 template <typename F>
@@ -240,8 +245,13 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     return list;
 }
 
-const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::list() const {
-    if (list_) return *list_;
+inline const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::list() const {
+    if (list_) [[likely]]
+        return *list_;
+    return first_list();
+}
+
+const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::first_list() const {
     if (!shared_) {
         own_ = build_list();
         list_ = &own_;

@@ -107,11 +107,13 @@ private:
     // set for those layers, `full` is the box's 8x8 layer mask in the block (bit x + 8 y).
     template <typename F>
     void for_each_block(const VoxelKey& l, const VoxelKey& h, F&& f) const;
-    // Block (bx, by, bz) of the window, looked up on first use.
+    // Block (bx, by, bz) of the window, looked up (look_up) on first use.
     const PackedVoxels::Block* block(int bx, int by, int bz) const;
+    const PackedVoxels::Block* look_up(int bx, int by, int bz) const;
 
-    // The voxel list (building it, or taking it from the shared list, on first use).
+    // The voxel list (building it, or taking it from the shared list, on first use: first_list).
     const VoxelList& list() const;
+    const VoxelList& first_list() const;
     VoxelList build_list() const;
     // Whether H^k(v) goes through the voxel list.
     bool listed(const VoxelKey& v, int k) const;
