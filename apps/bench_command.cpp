@@ -122,6 +122,8 @@ struct Row {
     int threads = 0, repeat = 0;
     // Per-stage times (ms) of every run. IMLS: insert = normals, tsdf = implicit function.
     std::vector<double> read, insert, tsdf, mesh, total;
+    // The TSDF stage by phase (ms per run; fast path with the seeded surface only, else empty).
+    std::vector<double> setup, seed_wave, later_waves, serial, field;
     double peak_rss = -1;
 
     double median_total() const { return median(total); }
@@ -158,6 +160,14 @@ Row run_row(const fs::path& scan, const std::string& label, Path path, const Met
             insert = 1e3 * rec.summary().seconds_insert;
             tsdf = 1e3 * rec.summary().seconds_tsdf;
             mesh_ms = 1e3 * rec.summary().seconds_mesh;
+            if (path == Path::Fast && c.seeded_surface) {
+                const SeededTiming& p = rec.summary().tsdf_phases;
+                row.setup.push_back(1e3 * p.setup);
+                row.seed_wave.push_back(1e3 * p.seed_wave);
+                row.later_waves.push_back(1e3 * p.later_waves);
+                row.serial.push_back(1e3 * p.serial);
+                row.field.push_back(1e3 * p.field);
+            }
         }
         row.points = cloud.points.size();
         row.triangles = mesh.triangles.size();
@@ -256,12 +266,33 @@ std::string format_rows(const std::vector<Row>& rows, bool ratios) {
     return out.str();
 }
 
+// The TSDF stage of the rows that have phases: medians per phase, and the stage's median.
+std::string format_phases(const std::vector<Row>& rows) {
+    std::ostringstream out;
+    char buf[320];
+    std::snprintf(buf, sizeof buf, "%-16s %3s %7s %9s %11s %7s %7s %8s\n", "scan", "thr", "setup", "seed wave", "later waves", "serial",
+                  "field", "tsdf");
+    out << buf;
+    for (const Row& r : rows) {
+        if (r.seed_wave.empty()) continue;
+        std::snprintf(buf, sizeof buf, "%-16s %3d %7.1f %9.1f %11.1f %7.1f %7.1f %8.1f\n", r.scan.c_str(), r.threads, median(r.setup),
+                      median(r.seed_wave), median(r.later_waves), median(r.serial), median(r.field), median(r.tsdf));
+        out << buf;
+    }
+    return out.str();
+}
+
 nlohmann::json to_json(const Row& r) {
-    return {{"scan", r.scan},           {"path", r.path},           {"points", r.points},
+    nlohmann::json j = {{"scan", r.scan},           {"path", r.path},           {"points", r.points},
             {"threads", r.threads},     {"repeat", r.repeat},       {"triangles", r.triangles},
             {"read_ms", median(r.read)}, {"insert_ms", median(r.insert)}, {"tsdf_ms", median(r.tsdf)},
             {"mesh_ms", median(r.mesh)}, {"total_ms", r.median_total()},  {"total_min_ms", r.min_total()},
             {"peak_rss_mib", r.peak_rss}, {"total_runs_ms", r.total}};
+    if (!r.seed_wave.empty())
+        j["tsdf_phases_ms"] = {{"setup", median(r.setup)},         {"seed_wave", median(r.seed_wave)},
+                               {"later_waves", median(r.later_waves)}, {"serial", median(r.serial)},
+                               {"field", median(r.field)}};
+    return j;
 }
 
 // Simulated town frames (sensor frame, KITTI .bin) in `dir`: `frames` frames spread over a
@@ -390,6 +421,15 @@ int run_bench(const BenchOptions& o) {
         std::printf("machine: %s\n", machine.c_str());
         std::printf("total = read + insert + tsdf + mesh (IMLS: insert = normals, tsdf = implicit function)\n\n");
         std::fputs(format_rows(rows, true).c_str(), stdout);
+        std::vector<Row> phased;  // the fast rows, and the thread-scaling ones
+        for (const std::vector<Row>* group : {&rows, &thread_rows})
+            for (const Row& r : *group)
+                if (!r.seed_wave.empty()) phased.push_back(r);
+        if (!phased.empty()) {
+            std::printf("\nthe fast path's tsdf by phase (medians, ms): setup = packing and seeds; seed wave and later waves\n"
+                        "= their parallel parts; serial = between the waves; field = ordering the defined vertices:\n");
+            std::fputs(format_phases(phased).c_str(), stdout);
+        }
         if (!size_rows.empty()) {
             std::printf("\nscaling with input size (fast path):\n");
             std::fputs(format_rows(size_rows, false).c_str(), stdout);

@@ -97,6 +97,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
         if (config_.seeded_surface && evaluation == Evaluation::Fast) {
             SeededTsdf seeded = compute_seeded_tsdf(grid_, config_, sensor_, EigenSolver::ClosedForm, previous_ ? &*previous_ : nullptr);
             summary_.seconds_tsdf = seconds_since(t0);
+            summary_.tsdf_phases = seeded.timing;
             summary_.candidate_vertices = seeded.evaluated;
             summary_.reused_vertices = seeded.reused;
             summary_.defined_vertices = seeded.field.size();
@@ -106,6 +107,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
             previous_ = std::move(seeded.field);
             grid_.clear_touched();
         } else {
+            summary_.tsdf_phases = {};
             TsdfStats stats;
             const TsdfField field = compute_tsdf(grid_, config_, sensor_, &stats);
             summary_.candidate_vertices = stats.candidates;

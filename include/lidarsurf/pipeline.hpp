@@ -12,6 +12,7 @@
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
 namespace lidarsurf {
@@ -27,6 +28,8 @@ struct ReconstructionSummary {
     std::size_t mesh_triangles = 0;
     std::size_t memory_estimate = 0;  ///< bytes: the grid plus estimate_extraction_bytes (the budget check)
     double seconds_insert = 0, seconds_tsdf = 0, seconds_mesh = 0;
+    /// The TSDF stage by phase, for the fast path with seeded_surface (zero otherwise).
+    SeededTiming tsdf_phases;
 
     /// One line: counts and per-stage times.
     std::string to_string() const;

@@ -286,11 +286,19 @@ PYBIND11_MODULE(_lidarsurf, m) {
                 d["seconds_insert"] = s.seconds_insert;
                 d["seconds_tsdf"] = s.seconds_tsdf;
                 d["seconds_mesh"] = s.seconds_mesh;
+                py::dict phases;
+                phases["setup"] = s.tsdf_phases.setup;
+                phases["seed_wave"] = s.tsdf_phases.seed_wave;
+                phases["later_waves"] = s.tsdf_phases.later_waves;
+                phases["serial"] = s.tsdf_phases.serial;
+                phases["field"] = s.tsdf_phases.field;
+                d["seconds_tsdf_phases"] = phases;
                 return d;
             },
             "Counts and times as a dict: points_read, points_dropped, voxels, and of the last extraction vertices_evaluated, "
             "vertices_reused (taken from the extraction before), vertices_defined, mesh_vertices, mesh_triangles, "
-            "seconds_tsdf, seconds_mesh; seconds_insert sums every integrate().")
+            "seconds_tsdf, seconds_mesh, and seconds_tsdf_phases (the fast path's TSDF stage by phase: setup, seed_wave, "
+            "later_waves, serial, field; zeros for the reference path); seconds_insert sums every integrate().")
         .def("__repr__", [](const Reconstructor& rec) {
             return "Reconstructor(" + std::to_string(rec.summary().points_read) + " points, " + std::to_string(rec.grid().size()) + " voxels)";
         });

@@ -189,6 +189,9 @@ def test_reconstructor_meshes_incrementally_with_the_mesh_of_one_extraction(scan
     mesh = rec.extract_mesh()
     s = rec.summary
     assert s["points_read"] == len(scan) and s["vertices_reused"] > 0 and s["vertices_evaluated"] > 0
+    phases = s["seconds_tsdf_phases"]
+    assert set(phases) == {"setup", "seed_wave", "later_waves", "serial", "field"}
+    assert min(phases.values()) >= 0 and sum(phases.values()) <= s["seconds_tsdf"]
     whole = lidarsurf.reconstruct(np.concatenate([first, second]))
     np.testing.assert_array_equal(mesh.vertices, whole.vertices)
     np.testing.assert_array_equal(mesh.triangles, whole.triangles)

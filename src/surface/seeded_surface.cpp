@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <deque>
@@ -158,6 +159,9 @@ public:
             for (const VoxelKey& n : nexts[c]) visit(n, out);
         }
     }
+    /// Wall time run() spent in the waves' parallel parts, and between them (seconds).
+    double seconds_parallel() const { return seconds_parallel_; }
+    double seconds_serial() const { return seconds_serial_; }
     /// Runs the waves from wave(). A wave is examined in parallel chunks of `chunk` cubes, each
     /// with its own `make_view()`: `view.corners(cube, s)` sets the samples of the cube's corners
     /// and returns whether they are all defined (false: the cube cannot be active, skip it; `s`
@@ -167,24 +171,33 @@ public:
     std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave) {
         std::vector<VoxelKey> next;
         std::vector<std::vector<VoxelKey>> actives, nexts;
+        using Clock = std::chrono::steady_clock;
+        auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
         while (!wave_.empty()) {
+            const auto t0 = Clock::now();
             before_wave(wave_);
             const std::size_t chunks = (wave_.size() + chunk - 1) / chunk;
             actives.assign(chunks, {});
             nexts.assign(chunks, {});
+            const auto t1 = Clock::now();
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
                 auto view = make_view();
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
                     examine(view, wave_[i], seeding, actives[c], nexts[c]);
             });
+            const auto t2 = Clock::now();
             next.clear();
             absorb(actives, nexts, next);
             std::swap(wave_, next);
             seeding = false;
+            seconds_parallel_ += seconds(t1, t2);
+            seconds_serial_ += seconds(t0, t1) + seconds(t2, Clock::now());
         }
         // Which cubes are reached does not depend on the order of the waves; the sort makes the
         // output (and so the mesh's vertex and triangle order) deterministic.
+        const auto t3 = Clock::now();
         sort_zyx(active_);
+        seconds_serial_ += seconds(t3, Clock::now());
         return std::move(active_);
     }
 
@@ -200,6 +213,7 @@ private:
     BlockMap<std::uint8_t> visited_{0};
     BlockMap<std::uint8_t>::WriteAccessor seen_of_;
     std::vector<VoxelKey> wave_, active_;
+    double seconds_parallel_ = 0, seconds_serial_ = 0;
 };
 
 }  // namespace
@@ -405,6 +419,10 @@ DirtyRegion dirty_region(const VoxelGrid& grid, int reach) {
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
                                EigenSolver solver, const TsdfField* previous) {
     config.validate();
+    using Clock = std::chrono::steady_clock;
+    auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    SeededTiming timing;
+    auto t0 = Clock::now();
     // A window of vertex block b reads the voxel blocks within ceil(max_reach / 8) of b.
     const int reach = (config.max_reach() + BlockMap<std::int32_t>::kSize - 1) / BlockMap<std::int32_t>::kSize;
     const DirtyRegion dirty = previous ? dirty_region(grid, reach) : DirtyRegion{};
@@ -449,6 +467,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         }
         lists.reserve(slots.block_count());
         std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size());
+        timing.setup = seconds_since(t0);
+        t0 = Clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
             CornerEvaluator corners(shared);
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -459,7 +479,10 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                 });
             }
         });
+        timing.seed_wave = seconds_since(t0);
+        t0 = Clock::now();
         search.absorb(active, next_cubes, search.wave());
+        timing.serial = seconds_since(t0);
     }
     // The later waves (a quarter of the vertices, ~40 small waves): the corners' blocks are
     // created serially (one lookup per cube unless it is a block's last on some axis, or the
@@ -483,6 +506,9 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave);
     out.evaluated = evaluated.load();
     out.reused = reused.load();
+    timing.later_waves = search.seconds_parallel();
+    timing.serial += search.seconds_serial();
+    t0 = Clock::now();
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
     // offset), which does not depend on the thread count.
@@ -513,6 +539,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         }
     });
     out.field = TsdfField(std::move(slots), std::move(field_keys), std::move(field_samples), grid.voxel_size(), grid.origin());
+    timing.field = seconds_since(t0);
+    out.timing = timing;
     return out;
 }
 

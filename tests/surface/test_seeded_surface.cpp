@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <set>
 #include <span>
@@ -209,4 +210,21 @@ TEST(SeededSurface, TheFieldDoesNotDependOnTheThreadCount) {
             ASSERT_EQ(runs[r].field.find(first.field.keys()[i]), &runs[r].field.samples()[i]) << i;
         }
     }
+}
+
+// The phase times (SeededTiming) are disjoint parts of the call: none is negative, the seed wave
+// (where a lidar frame's vertices are mostly evaluated) takes time, and together they do not
+// exceed the call's wall time measured from outside.
+TEST(SeededSurface, PhaseTimesArePartsOfTheCall) {
+    const Eigen::Vector3d origin(1.0, -2.0, 0.3);
+    const PointCloud cloud = sim::simulate_scan(offroad(), sim::SensorModel::hdl64(), origin, 5);
+    VoxelGrid grid(0.2);
+    grid.insert(std::span<const Eigen::Vector3d>(cloud.points));
+    const auto t0 = std::chrono::steady_clock::now();
+    const SeededTsdf s = compute_seeded_tsdf(grid, ReconstructionConfig{}, origin);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const SeededTiming& t = s.timing;
+    for (double phase : {t.setup, t.seed_wave, t.later_waves, t.serial, t.field}) EXPECT_GE(phase, 0.0);
+    EXPECT_GT(t.seed_wave, 0.0);
+    EXPECT_LE(t.setup + t.seed_wave + t.later_waves + t.serial + t.field, wall);
 }

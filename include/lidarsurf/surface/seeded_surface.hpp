@@ -25,11 +25,22 @@ namespace lidarsurf {
 /// Returns the active cubes reached, sorted (z, y, x).
 std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid, int dilation);
 
+/// Wall time of compute_seeded_tsdf's phases, in seconds (`lidarsurf bench` prints them): where
+/// the TSDF stage's time goes, and how much of it runs on one thread.
+struct SeededTiming {
+    double setup = 0;        ///< packing the voxels, the seed cubes and their slot blocks (mostly serial)
+    double seed_wave = 0;    ///< the seeds' wave, in parallel (most of the vertices on a lidar frame)
+    double later_waves = 0;  ///< the parallel parts of the later waves
+    double serial = 0;       ///< between the waves: taking in each wave's cubes, creating slot blocks, sorting the active cubes
+    double field = 0;        ///< ordering the defined vertices into the field (in parallel)
+};
+
 struct SeededTsdf {
     TsdfField field;                ///< the defined vertices that were evaluated (a superset of the cubes' corners)
     std::vector<VoxelKey> cubes;    ///< as seeded_cubes(field, grid) on the full field
     std::size_t evaluated = 0;      ///< vertices evaluated
     std::size_t reused = 0;         ///< vertices taken from `previous` instead (see compute_seeded_tsdf)
+    SeededTiming timing;
 };
 
 /// The fast path: the same cubes and the same values at their corners (up to rounding) as
