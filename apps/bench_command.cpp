@@ -266,7 +266,7 @@ std::string format_rows(const std::vector<Row>& rows, bool ratios) {
     return out.str();
 }
 
-// The TSDF stage of the rows that have phases: medians per phase, and the stage's median.
+// The TSDF stage of `rows` (which have phases): medians per phase, and the stage's median.
 std::string format_phases(const std::vector<Row>& rows) {
     std::ostringstream out;
     char buf[320];
@@ -274,7 +274,6 @@ std::string format_phases(const std::vector<Row>& rows) {
                   "field", "tsdf");
     out << buf;
     for (const Row& r : rows) {
-        if (r.seed_wave.empty()) continue;
         std::snprintf(buf, sizeof buf, "%-16s %3d %7.1f %9.1f %11.1f %7.1f %7.1f %8.1f\n", r.scan.c_str(), r.threads, median(r.setup),
                       median(r.seed_wave), median(r.later_waves), median(r.serial), median(r.field), median(r.tsdf));
         out << buf;
