@@ -60,7 +60,9 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eig
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from) {
     const auto t0 = std::chrono::steady_clock::now();
     summary_.points_read += points.size();
-    constexpr std::size_t kChunk = 1 << 16;  // the budget is checked between chunks
+    // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points),
+    // since each chunk pays a pass over all the voxels so far (counting sort, statistics).
+    constexpr std::size_t kChunk = 1 << 18;
     const std::size_t before = grid_.memory_bytes();
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {

@@ -1,11 +1,14 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <sstream>
 
 #include <tbb/parallel_for.h>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/radix_sort.hpp"
 
 namespace lidarsurf {
 
@@ -109,28 +112,36 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
             ++dropped;
     }
     stats_.resize(keys_.size());  // the new voxels, empty
-    // 3. The points of each voxel, in point order (counting sort), then Welford's update per voxel
-    //    in parallel: each voxel sees its points in the order one-by-one insertion gives it, so the
-    //    statistics are identical to the last bit.
-    std::vector<std::uint32_t> start(stats_.size() + 1, 0);
-    for (std::uint32_t v : voxel)
-        if (v != kSkip) ++start[v + 1];
-    for (std::size_t v = 0; v < stats_.size(); ++v) start[v + 1] += start[v];
-    std::vector<std::uint32_t> order(n - dropped);
-    {
-        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
-        for (std::size_t i = 0; i < n; ++i)
-            if (voxel[i] != kSkip) order[cursor[voxel[i]]++] = static_cast<std::uint32_t>(i);
-    }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, stats_.size(), 512), [&](const auto& r) {
-        for (std::size_t v = r.begin(); v != r.end(); ++v)
-            for (std::uint32_t j = start[v]; j < start[v + 1]; ++j) stats_[v].add(points[order[j]] - origin_);
+    // 3. The points of each voxel, in point order, then Welford's update per voxel in parallel:
+    //    each voxel sees its points in the order one-by-one insertion gives it, so the statistics
+    //    are identical to the last bit. The grouping is a stable LSD radix sort of the point indices
+    //    by voxel number (11-bit digits), so this call's cost does not grow with the voxels
+    //    inserted by earlier calls (a sequence fused frame by frame).
+    std::vector<std::uint32_t> order, scratch;
+    order.reserve(n - dropped);
+    std::uint32_t largest = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (voxel[i] != kSkip) {
+            order.push_back(static_cast<std::uint32_t>(i));
+            largest = std::max(largest, voxel[i]);
+        }
+    radix_sort(order, scratch, static_cast<int>(std::bit_width(largest)), [&](std::uint32_t i) { return voxel[i]; });
+    // The runs of equal voxel: run r is order[runs[r], runs[r + 1]).
+    std::vector<std::size_t> runs;
+    for (std::size_t j = 0; j < order.size(); ++j)
+        if (j == 0 || voxel[order[j]] != voxel[order[j - 1]]) runs.push_back(j);
+    runs.push_back(order.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 512), [&](const auto& r) {
+        for (std::size_t run = r.begin(); run != r.end(); ++run) {
+            VoxelStats& stats = stats_[voxel[order[runs[run]]]];
+            for (std::size_t j = runs[run]; j < runs[run + 1]; ++j) stats.add(points[order[j]] - origin_);
+        }
     });
     if (viewpoints_enabled_) {
         viewpoint_sums_.resize(stats_.size(), Eigen::Vector3d::Zero());
         const Eigen::Vector3d local = *viewpoint - origin_;
-        for (std::size_t v = 0; v < stats_.size(); ++v)
-            if (start[v + 1] > start[v]) viewpoint_sums_[v] += static_cast<double>(start[v + 1] - start[v]) * local;
+        for (std::size_t run = 0; run + 1 < runs.size(); ++run)
+            viewpoint_sums_[voxel[order[runs[run]]]] += static_cast<double>(runs[run + 1] - runs[run]) * local;
     }
     points_ += n - dropped;
     return dropped;

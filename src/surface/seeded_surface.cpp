@@ -183,7 +183,7 @@ public:
             nexts.assign(chunks, {});
             const auto t1 = Clock::now();
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-                auto view = make_view();
+                auto&& view = make_view();
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
                     examine(view, wave_[i], seeding, actives[c], nexts[c]);
             });
@@ -442,6 +442,14 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                                          defined_vertices, evaluated, previous, dirty.vertex_blocks, reused, runs,
                                          lists};
     CubeSearch search(grid);
+    // One evaluator per thread, for every task and wave: its windows (and their voxel lists and
+    // level buffers) stay built from one task to the next.
+    tbb::enumerable_thread_specific<std::unique_ptr<CornerEvaluator>> evaluators;
+    auto evaluator = [&]() -> CornerEvaluator& {
+        std::unique_ptr<CornerEvaluator>& e = evaluators.local();
+        if (!e) e = std::make_unique<CornerEvaluator>(shared);
+        return *e;
+    };
 
     // Wave 0, the seeds (three quarters of the vertices on a lidar frame), in parallel per block:
     // the seed cubes are the occupied voxels dilated by [-d, d] (block masks, no per-cube
@@ -470,7 +478,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         timing.setup = seconds_since(t0);
         t0 = Clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
-            CornerEvaluator corners(shared);
+            CornerEvaluator& corners = evaluator();
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(visited_block[i]);
                 for_each_bit(seeds[i].mask, [&](int offset) {
@@ -480,6 +488,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             }
         });
         timing.seed_wave = seconds_since(t0);
+        if (std::getenv("LS_WAVES")) fprintf(stderr, "seed wave: evaluated %zu cubes %zu\n", evaluated.load(), search.visited().block_count());
         t0 = Clock::now();
         search.absorb(active, next_cubes, search.wave());
         timing.serial = seconds_since(t0);
@@ -504,7 +513,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         lists.reserve(slots.block_count());
     };
     SeededTsdf out;
-    out.cubes = search.run(false, 64, [&] { return CornerEvaluator(shared); }, before_wave);
+    out.cubes = search.run(false, 64, evaluator, before_wave);
+    evaluators.clear();  // adds their counts
     out.evaluated = evaluated.load();
     out.reused = reused.load();
     timing.later_waves = search.seconds_parallel();

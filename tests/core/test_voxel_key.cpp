@@ -39,6 +39,20 @@ TEST(VoxelKey, SortZyxIsTheLexicographicOrder) {
         ASSERT_EQ(keys.size(), expected.size());
         for (std::size_t i = 0; i < keys.size(); ++i) ASSERT_EQ(keys[i], expected[i]) << "range " << hi << ", position " << i;
     }
+    // Keys that vary along one axis only (no bits for the others), and all equal.
+    for (int axis = 0; axis < 3; ++axis) {
+        std::mt19937 rng(static_cast<unsigned>(axis));
+        std::uniform_int_distribution<int> c(-kMaxLatticeIndex, kMaxLatticeIndex);
+        std::vector<VoxelKey> keys(3000, VoxelKey(7, -9, 11));
+        for (VoxelKey& k : keys) k[axis] = c(rng);
+        std::vector<VoxelKey> expected = keys;
+        std::sort(expected.begin(), expected.end(), zyx_less);
+        sort_zyx(keys);
+        EXPECT_EQ(keys, expected) << "axis " << axis;
+    }
+    std::vector<VoxelKey> same(100, VoxelKey(-3, 4, -5));
+    sort_zyx(same);
+    EXPECT_EQ(same, std::vector<VoxelKey>(100, VoxelKey(-3, 4, -5)));
     std::vector<VoxelKey> none;
     sort_zyx(none);
     EXPECT_TRUE(none.empty());

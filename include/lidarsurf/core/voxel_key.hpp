@@ -37,7 +37,7 @@ struct VoxelKeyHash {
     }
 };
 
-/// Sorts keys by z, then y, then x (in parallel; each key within +-kMaxLatticeIndex).
+/// Sorts keys by z, then y, then x (radix sort; comparisons when the keys span more than 64 bits).
 void sort_zyx(std::vector<VoxelKey>& keys);
 
 /// Floor division for negative lattice indices (C++ '/' truncates toward zero).
