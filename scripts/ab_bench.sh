@@ -39,7 +39,7 @@ for ((r = 1; r <= rounds; ++r)); do
         [ $tag = B ] && bin=$b
         # Table rows: scan label (may hold spaces), points, path, thr, read, insert, tsdf, mesh, total, min, ...
         "$bin" bench "$@" --no-reference --no-imls --no-scaling --repeat 7 2>/dev/null |
-            awk -v tag=$tag '$0 ~ / fast / { for (i = 1; i <= NF; ++i) if ($i == "fast") break;
+            awk -v tag=$tag '$0 ~ / fast +[0-9]+ / { for (i = 1; i <= NF; ++i) if ($i == "fast") break;
                  label = $1; for (j = 2; j < i - 1; ++j) label = label "_" $j;
                  print tag, label, $(i + 2), $(i + 3), $(i + 4), $(i + 5), $(i + 6), $(i + 7) }' >> "$out"
     done
