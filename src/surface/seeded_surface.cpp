@@ -503,11 +503,11 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         for (const VoxelKey& cube : cubes) {
             constexpr int m = Slots::kSize - 1;
             const VoxelKey block = Slots::block_of(cube);
-            const bool inner = (cube.x() & m) != m && (cube.y() & m) != m && (cube.z() & m) != m;  // all corners in `block`
-            if (inner && last == block) continue;
-            BlockMask base{};
-            base[static_cast<std::size_t>(cube.z() & m)] = std::uint64_t{1} << (Slots::offset_of(cube) & 63);
-            for_each_corner_block(block, base, [&](const VoxelKey& b) { slots.block_index(b); });
+            // The axes on which the cube is its block's last: its corners reach the next block there.
+            const int last_on = ((cube.x() & m) == m) | ((cube.y() & m) == m) << 1 | ((cube.z() & m) == m) << 2;
+            if (last_on == 0 && last == block) continue;  // all corners in `block`, created already
+            for (int n = 0; n < 8; ++n)  // the order of for_each_corner_block
+                if ((n & ~last_on) == 0) slots.block_index(block + VoxelKey(n & 1, (n >> 1) & 1, n >> 2));
             last = block;
         }
         lists.reserve(slots.block_count());
