@@ -101,11 +101,11 @@ public:
     /// The block with key `block`, or nullptr.
     const Block* find_block(const VoxelKey& block) const {
         const std::uint32_t i = index_.find(block);
-        return i == BlockIndex::kAbsent ? nullptr : blocks_[i].get();
+        return i == BlockIndex::kAbsent ? nullptr : blocks_[i];
     }
     Block* find_block(const VoxelKey& block) {
         const std::uint32_t i = index_.find(block);
-        return i == BlockIndex::kAbsent ? nullptr : blocks_[i].get();
+        return i == BlockIndex::kAbsent ? nullptr : blocks_[i];
     }
     /// The block with key `block`, created (filled with the empty value) if absent.
     Block& block(const VoxelKey& block) { return *blocks_[block_index(block)]; }
@@ -113,7 +113,7 @@ public:
     std::uint32_t block_index(const VoxelKey& block) {
         const auto [i, added] = index_.try_emplace(block, static_cast<std::uint32_t>(blocks_.size()));
         if (added) {
-            blocks_.push_back(std::make_unique<Block>());
+            blocks_.push_back(new_block());
             blocks_.back()->fill(empty_);
             block_keys_.push_back(block);
         }
@@ -129,9 +129,9 @@ public:
     T& operator[](const VoxelKey& key) { return block(block_of(key))[static_cast<std::size_t>(offset_of(key))]; }
 
     std::size_t block_count() const { return blocks_.size(); }
-    /// Bytes held by the map: the blocks (with a heap header each), their pointers, keys and index.
+    /// Bytes held by the map: the blocks' pages, their pointers, keys and index.
     std::size_t memory_bytes() const {
-        return blocks_.size() * (sizeof(Block) + 16) + blocks_.capacity() * sizeof(void*) +
+        return pages_.size() * (kPageBlocks * sizeof(Block) + 16) + (blocks_.capacity() + pages_.capacity()) * sizeof(void*) +
                block_keys_.capacity() * sizeof(VoxelKey) + index_.memory_bytes();
     }
     /// Block keys in creation order; block i of block_at(i).
@@ -199,7 +199,19 @@ public:
 private:
     T empty_;
     BlockIndex index_;
-    std::vector<std::unique_ptr<Block>> blocks_;
+    // Blocks are allocated kPageBlocks at a time (one allocation instead of one per block: block
+    // creation is a serial step of the surface search); a page's blocks are filled when handed out.
+    static constexpr std::size_t kPageBlocks = 32;
+    Block* new_block() {
+        if (page_free_ == 0) {
+            pages_.emplace_back(new Block[kPageBlocks]);
+            page_free_ = kPageBlocks;
+        }
+        return &pages_.back()[kPageBlocks - page_free_--];
+    }
+    std::vector<Block*> blocks_;
+    std::vector<std::unique_ptr<Block[]>> pages_;
+    std::size_t page_free_ = 0;
     std::vector<VoxelKey> block_keys_;
 };
 
