@@ -114,23 +114,37 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     stats_.resize(keys_.size());  // the new voxels, empty
     // 3. The points of each voxel, in point order, then Welford's update per voxel in parallel:
     //    each voxel sees its points in the order one-by-one insertion gives it, so the statistics
-    //    are identical to the last bit. The grouping is a stable LSD radix sort of the point indices
-    //    by voxel number (11-bit digits), so this call's cost does not grow with the voxels
-    //    inserted by earlier calls (a sequence fused frame by frame).
-    std::vector<std::uint32_t> order, scratch;
-    order.reserve(n - dropped);
-    std::uint32_t largest = 0;
-    for (std::size_t i = 0; i < n; ++i)
-        if (voxel[i] != kSkip) {
-            order.push_back(static_cast<std::uint32_t>(i));
-            largest = std::max(largest, voxel[i]);
+    //    are identical to the last bit. The grouping is a counting sort over the range of voxel
+    //    numbers this batch touches when that range is small (a frame into a new grid), else a
+    //    stable radix sort of the point indices (11-bit digits), so that a batch's cost does not
+    //    grow with the voxels of earlier batches (a sequence fused frame by frame).
+    const std::size_t m = n - dropped;
+    std::uint32_t lo = kSkip, hi = 0;
+    for (std::uint32_t v : voxel)
+        if (v != kSkip) lo = std::min(lo, v), hi = std::max(hi, v);
+    std::vector<std::uint32_t> order(m);  // point indices, grouped by voxel
+    std::vector<std::size_t> runs;        // run r (one voxel's points) is order[runs[r], runs[r + 1])
+    if (m > 0 && hi - lo < 4 * m) {
+        std::vector<std::uint32_t> start(hi - lo + 2, 0);
+        for (std::uint32_t v : voxel)
+            if (v != kSkip) ++start[v - lo + 1];
+        runs.reserve(hi - lo + 2);
+        for (std::size_t v = 0; v + 1 < start.size(); ++v) {
+            if (start[v + 1] > 0) runs.push_back(start[v]);
+            start[v + 1] += start[v];
         }
-    radix_sort(order, scratch, static_cast<int>(std::bit_width(largest)), [&](std::uint32_t i) { return voxel[i]; });
-    // The runs of equal voxel: run r is order[runs[r], runs[r + 1]).
-    std::vector<std::size_t> runs;
-    for (std::size_t j = 0; j < order.size(); ++j)
-        if (j == 0 || voxel[order[j]] != voxel[order[j - 1]]) runs.push_back(j);
-    runs.push_back(order.size());
+        for (std::size_t i = 0; i < n; ++i)
+            if (voxel[i] != kSkip) order[start[voxel[i] - lo]++] = static_cast<std::uint32_t>(i);
+    } else if (m > 0) {
+        std::size_t at = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            if (voxel[i] != kSkip) order[at++] = static_cast<std::uint32_t>(i);
+        std::vector<std::uint32_t> scratch;
+        radix_sort(order, scratch, static_cast<int>(std::bit_width(hi)), [&](std::uint32_t i) { return voxel[i]; });
+        for (std::size_t j = 0; j < m; ++j)
+            if (j == 0 || voxel[order[j]] != voxel[order[j - 1]]) runs.push_back(j);
+    }
+    runs.push_back(m);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 512), [&](const auto& r) {
         for (std::size_t run = r.begin(); run != r.end(); ++run) {
             VoxelStats& stats = stats_[voxel[order[runs[run]]]];
