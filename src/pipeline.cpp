@@ -60,8 +60,8 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eig
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from) {
     const auto t0 = std::chrono::steady_clock::now();
     summary_.points_read += points.size();
-    // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points),
-    // since each chunk pays a pass over all the voxels so far (counting sort, statistics).
+    // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points):
+    // a frame cut in two chunks paid two groupings and two parallel updates (0.6-0.8 ms).
     constexpr std::size_t kChunk = 1 << 18;
     const std::size_t before = grid_.memory_bytes();
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);

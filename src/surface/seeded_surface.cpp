@@ -488,7 +488,6 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             }
         });
         timing.seed_wave = seconds_since(t0);
-        if (std::getenv("LS_WAVES")) fprintf(stderr, "seed wave: evaluated %zu cubes %zu\n", evaluated.load(), search.visited().block_count());
         t0 = Clock::now();
         search.absorb(active, next_cubes, search.wave());
         timing.serial = seconds_since(t0);
