@@ -3,6 +3,7 @@
 // to IMLS, and the scaling with input size and threads (issue 5). Without scans it simulates
 // HDL-64 frames of the procedural town.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -122,8 +123,9 @@ struct Row {
     int threads = 0, repeat = 0;
     // Per-stage times (ms) of every run. IMLS: insert = normals, tsdf = implicit function.
     std::vector<double> read, insert, tsdf, mesh, total;
-    // The TSDF stage by phase (ms per run; fast path with the seeded surface only, else empty).
-    std::vector<double> setup, seed_wave, later_waves, serial, field;
+    // The TSDF stage by phase (ms per run, in SeededTiming::named() order; fast path with the
+    // seeded surface only, else empty).
+    std::array<std::vector<double>, SeededTiming::kPhases> phases;
     double peak_rss = -1;
 
     double median_total() const { return median(total); }
@@ -161,12 +163,8 @@ Row run_row(const fs::path& scan, const std::string& label, Path path, const Met
             tsdf = 1e3 * rec.summary().seconds_tsdf;
             mesh_ms = 1e3 * rec.summary().seconds_mesh;
             if (path == Path::Fast && c.seeded_surface) {
-                const SeededTiming& p = rec.summary().tsdf_phases;
-                row.setup.push_back(1e3 * p.setup);
-                row.seed_wave.push_back(1e3 * p.seed_wave);
-                row.later_waves.push_back(1e3 * p.later_waves);
-                row.serial.push_back(1e3 * p.serial);
-                row.field.push_back(1e3 * p.field);
+                const auto named = rec.summary().tsdf_phases.named();
+                for (std::size_t i = 0; i < named.size(); ++i) row.phases[i].push_back(1e3 * named[i].second);
             }
         }
         row.points = cloud.points.size();
@@ -270,12 +268,24 @@ std::string format_rows(const std::vector<Row>& rows, bool ratios) {
 std::string format_phases(const std::vector<Row>& rows) {
     std::ostringstream out;
     char buf[320];
-    std::snprintf(buf, sizeof buf, "%-16s %3s %7s %9s %11s %7s %7s %8s\n", "scan", "thr", "setup", "seed wave", "later waves", "serial",
-                  "field", "tsdf");
+    constexpr std::array<int, SeededTiming::kPhases> width{7, 9, 11, 7, 7};  // each phase's column
+    std::snprintf(buf, sizeof buf, "%-16s %3s", "scan", "thr");
     out << buf;
+    for (std::size_t i = 0; i < width.size(); ++i) {
+        std::string name = SeededTiming{}.named()[i].first;
+        std::replace(name.begin(), name.end(), '_', ' ');
+        std::snprintf(buf, sizeof buf, " %*s", width[i], name.c_str());
+        out << buf;
+    }
+    out << "     tsdf\n";
     for (const Row& r : rows) {
-        std::snprintf(buf, sizeof buf, "%-16s %3d %7.1f %9.1f %11.1f %7.1f %7.1f %8.1f\n", r.scan.c_str(), r.threads, median(r.setup),
-                      median(r.seed_wave), median(r.later_waves), median(r.serial), median(r.field), median(r.tsdf));
+        std::snprintf(buf, sizeof buf, "%-16s %3d", r.scan.c_str(), r.threads);
+        out << buf;
+        for (std::size_t i = 0; i < width.size(); ++i) {
+            std::snprintf(buf, sizeof buf, " %*.1f", width[i], median(r.phases[i]));
+            out << buf;
+        }
+        std::snprintf(buf, sizeof buf, " %8.1f\n", median(r.tsdf));
         out << buf;
     }
     return out.str();
@@ -287,10 +297,11 @@ nlohmann::json to_json(const Row& r) {
             {"read_ms", median(r.read)}, {"insert_ms", median(r.insert)}, {"tsdf_ms", median(r.tsdf)},
             {"mesh_ms", median(r.mesh)}, {"total_ms", r.median_total()},  {"total_min_ms", r.min_total()},
             {"peak_rss_mib", r.peak_rss}, {"total_runs_ms", r.total}};
-    if (!r.seed_wave.empty())
-        j["tsdf_phases_ms"] = {{"setup", median(r.setup)},         {"seed_wave", median(r.seed_wave)},
-                               {"later_waves", median(r.later_waves)}, {"serial", median(r.serial)},
-                               {"field", median(r.field)}};
+    if (!r.phases[0].empty()) {
+        nlohmann::json phases;
+        for (std::size_t i = 0; i < r.phases.size(); ++i) phases[SeededTiming{}.named()[i].first] = median(r.phases[i]);
+        j["tsdf_phases_ms"] = phases;
+    }
     return j;
 }
 
@@ -423,7 +434,7 @@ int run_bench(const BenchOptions& o) {
         std::vector<Row> phased;  // the fast rows, and the thread-scaling ones
         for (const std::vector<Row>* group : {&rows, &thread_rows})
             for (const Row& r : *group)
-                if (!r.seed_wave.empty()) phased.push_back(r);
+                if (!r.phases[0].empty()) phased.push_back(r);
         if (!phased.empty()) {
             std::printf("\nthe fast path's tsdf by phase (medians, ms): setup = packing and seeds; seed wave and later waves\n"
                         "= their parallel parts; serial = between the waves; field = ordering the defined vertices:\n");

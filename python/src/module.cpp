@@ -287,11 +287,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
                 d["seconds_tsdf"] = s.seconds_tsdf;
                 d["seconds_mesh"] = s.seconds_mesh;
                 py::dict phases;
-                phases["setup"] = s.tsdf_phases.setup;
-                phases["seed_wave"] = s.tsdf_phases.seed_wave;
-                phases["later_waves"] = s.tsdf_phases.later_waves;
-                phases["serial"] = s.tsdf_phases.serial;
-                phases["field"] = s.tsdf_phases.field;
+                for (const auto& [name, seconds] : s.tsdf_phases.named()) phases[name] = seconds;
                 d["seconds_tsdf_phases"] = phases;
                 return d;
             },

@@ -65,6 +65,16 @@ void for_each_corner_block(const VoxelKey& block, const BlockMask& bases, F&& f)
         if (any) f(block + VoxelKey(dx, dy, dz));
     }
 }
+// The same for one cube: its block, and the next block along each set of axes on which the cube
+// is its block's last (same order).
+template <typename F>
+void for_each_corner_block(const VoxelKey& cube, F&& f) {
+    constexpr int m = BlockMap<std::int32_t>::kSize - 1;
+    const VoxelKey block = BlockMap<std::int32_t>::block_of(cube);
+    const int last_on = ((cube.x() & m) == m) | ((cube.y() & m) == m) << 1 | ((cube.z() & m) == m) << 2;
+    for (int n = 0; n < 8; ++n)
+        if ((n & ~last_on) == 0) f(block + VoxelKey(n & 1, (n >> 1) & 1, n >> 2));
+}
 
 // The 6 faces: corner indices and the direction to the neighbouring cube.
 struct Face {
@@ -502,11 +512,9 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         for (const VoxelKey& cube : cubes) {
             constexpr int m = Slots::kSize - 1;
             const VoxelKey block = Slots::block_of(cube);
-            // The axes on which the cube is its block's last: its corners reach the next block there.
-            const int last_on = ((cube.x() & m) == m) | ((cube.y() & m) == m) << 1 | ((cube.z() & m) == m) << 2;
-            if (last_on == 0 && last == block) continue;  // all corners in `block`, created already
-            for (int n = 0; n < 8; ++n)  // the order of for_each_corner_block
-                if ((n & ~last_on) == 0) slots.block_index(block + VoxelKey(n & 1, (n >> 1) & 1, n >> 2));
+            const bool inner = (cube.x() & m) != m && (cube.y() & m) != m && (cube.z() & m) != m;  // all corners in `block`
+            if (inner && last == block) continue;
+            for_each_corner_block(cube, [&](const VoxelKey& b) { slots.block_index(b); });
             last = block;
         }
         lists.reserve(slots.block_count());

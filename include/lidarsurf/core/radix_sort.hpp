@@ -1,7 +1,7 @@
 #pragma once
-// Stable LSD radix sort by an unsigned integer key (11-bit digits: a counting sort per digit). Used
-// where a comparison sort was a serial step of a frame: the surface search's cubes (sort_zyx) and
-// the grouping of a batch's points by voxel (VoxelGrid::insert). O(items * key_bits / 11).
+// Stable LSD radix sort by an unsigned integer key (11-bit digits: a counting sort per digit), for
+// serial steps of a frame: sorting the surface search's cubes (sort_zyx) and, for batches that
+// touch voxels of many earlier batches, grouping points by voxel (VoxelGrid::insert). O(items * key_bits / 11).
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>

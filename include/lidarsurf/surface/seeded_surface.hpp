@@ -8,6 +8,9 @@
 //  - fast: search the cubes from the occupied voxels, evaluating a vertex only when a cube
 //    being visited needs it, with the windowed evaluate_vertex (same conditions, same values up
 //    to rounding).
+#include <array>
+#include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "lidarsurf/core/voxel_grid.hpp"
@@ -33,6 +36,13 @@ struct SeededTiming {
     double later_waves = 0;  ///< the parallel parts of the later waves
     double serial = 0;       ///< between the waves: taking in each wave's cubes, creating slot blocks, sorting the active cubes
     double field = 0;        ///< ordering the defined vertices into the field (in parallel)
+
+    static constexpr std::size_t kPhases = 5;
+    /// (name, seconds) of each phase, in the order above: the one list the bench's table and JSON
+    /// and the Python summary are built from.
+    std::array<std::pair<const char*, double>, kPhases> named() const {
+        return {{{"setup", setup}, {"seed_wave", seed_wave}, {"later_waves", later_waves}, {"serial", serial}, {"field", field}}};
+    }
 };
 
 struct SeededTsdf {
