@@ -207,6 +207,44 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
     sums.store(acc);
 }
 
+void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const {
+    constexpr int B = Map::kSize, m = B - 1;
+    const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
+    if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
+        throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");
+    // Bits a..b of a byte (x within a row), and bytes a..b of a word (rows y within a layer).
+    auto bit_range = [](int a, int b) -> std::uint64_t { return (0xffu >> (m - (b - a))) << a; };
+    auto byte_range = [](int a, int b) { return (~std::uint64_t{0} >> (8 * (m - (b - a)))) << (8 * a); };
+    constexpr std::uint64_t kEveryRow = 0x0101010101010101ull;
+    RawSums sums(acc, p);
+    const int bx0 = l.x() / B, bx1 = h.x() / B;
+    for (int bz = l.z() / B; bz <= h.z() / B; ++bz) {
+        // The slab's layers in this block, as a bit mask of layer indices.
+        const int z0 = std::max(l.z(), bz * B) & m, z1 = std::min(h.z(), bz * B + m) & m;
+        const unsigned slab_layers = (0xffu >> (m - (z1 - z0))) << z0;
+        for (int by = l.y() / B; by <= h.y() / B; ++by) {
+            const std::uint64_t rows = byte_range(std::max(l.y(), by * B) & m, std::min(h.y(), by * B + m) & m);
+            const int hy0 = std::max(l.y() + 1, by * B), hy1 = std::min(h.y() - 1, by * B + m);
+            const std::uint64_t hole_rows = ring && hy0 <= hy1 ? byte_range(hy0 & m, hy1 & m) : 0;
+            for (int bx = bx0; bx <= bx1; ++bx) {
+                const PackedVoxels::Block* block = this->block(bx, by, bz);
+                if (!block) continue;
+                unsigned layers = block->layers & slab_layers;
+                if (!layers) continue;
+                std::uint64_t mask = bit_range(std::max(l.x(), bx * B) & m, std::min(h.x(), bx * B + m) & m) * kEveryRow & rows;
+                const int hx0 = std::max(l.x() + 1, bx * B), hx1 = std::min(h.x() - 1, bx * B + m);
+                if (hole_rows && hx0 <= hx1) mask &= ~(bit_range(hx0 & m, hx1 & m) * kEveryRow & hole_rows);
+                for (; layers; layers &= layers - 1) {
+                    const int layer = std::countr_zero(layers);
+                    for (std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(layer)] & mask; bits; bits &= bits - 1)
+                        sums.add(block->at(std::countr_zero(bits) | (layer << 6)));
+                }
+            }
+        }
+    }
+    sums.store(acc);
+}
+
 NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     constexpr int B = Map::kSize, m = B - 1;
     // The region [8b - K, 8b + 6 + K]^3, in window coordinates.
@@ -332,14 +370,14 @@ Moments NeighbourhoodWindow::box(const VoxelKey& v, int k) const {
 Moments NeighbourhoodWindow::slab(const VoxelKey& v, int k, SlabExtension e) const {
     Moments acc;
     const VoxelBox b = slab_box(v, k, e);
-    add_shell(b.lo, b.hi, 0, v.cast<double>() * alpha_, acc);
+    add_slab(b.lo, b.hi, false, v.cast<double>() * alpha_, acc);
     return acc;
 }
 
 void NeighbourhoodWindow::grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e) const {
     // S^k \ S^{k-1}: the x-y ring of width one around S^{k-1}'s x-y range, on both layers.
     const VoxelBox b = slab_box(v, k, e);
-    add_shell(b.lo, b.hi, 1, v.cast<double>() * alpha_, acc, false);
+    add_slab(b.lo, b.hi, true, v.cast<double>() * alpha_, acc);
 }
 
 }  // namespace lidarsurf

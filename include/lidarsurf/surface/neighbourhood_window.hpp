@@ -102,6 +102,12 @@ private:
     // [lo + inset, hi - inset] when inset > 0 (a shell; with `caps` false the hole runs through
     // every layer: the x-y ring of a slab). The general path, for what the list does not cover.
     void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc, bool caps = true) const;
+    // add_shell for a slab (two layers, hi.z = lo.z + 1; `ring`: without the x-y interior
+    // [lo + 1, hi - 1], on both layers, as add_shell with inset 1 and no caps): the same voxels in
+    // the same order (so the same bits), with the box's row and column masks computed once per
+    // block row and column instead of per block and layer (slabs reach 3 to 4 blocks along their
+    // radial axis, and their bookkeeping was most of add_shell's cost on lidar frames).
+    void add_slab(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const;
     // Calls f(block, b, layers, full) for each window block b = (bx, by, bz) whose layers within
     // the box [l, h] (window coordinates) hold voxels, in the order z, y, x: `layers` has bit z
     // set for those layers, `full` is the box's 8x8 layer mask in the block (bit x + 8 y).
