@@ -125,7 +125,7 @@ inline int axis_level(int i, int v) { return std::max(v, i + 1) - std::min(v, i)
 }  // namespace
 
 NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level, int cube_level)
-    : voxels_(&voxels), alpha_(voxels.grid().voxel_size()), max_level_(max_level), cube_level_(cube_level < 0 ? max_level : cube_level) {
+    : voxels_(&voxels), alpha_(voxels.grid().voxel_size()), cube_level_(cube_level < 0 ? max_level : cube_level) {
     if (max_level < 1 || max_level > 64 || cube_level_ < 1 || cube_level_ > max_level)
         throw InvalidArgument("neighbourhood window: need 1 <= cube_level <= max_level <= 64 (got cube_level " + std::to_string(cube_level_) +
                               ", max_level " + std::to_string(max_level) + ")");

@@ -130,7 +130,6 @@ private:
 
     const PackedVoxels* voxels_;
     double alpha_;
-    int max_level_;
     int cube_level_;
     int radius_;   // blocks on each side of the vertex block
     int side_;     // 2 radius + 1
