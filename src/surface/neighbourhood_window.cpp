@@ -267,6 +267,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     list.x.assign(padded, kPad);
     list.y.assign(padded, kPad);
     list.z.assign(padded, kPad);
+    list.weight.assign(padded, 0);
     list.records.assign(padded, nullptr);
     std::size_t at = 0;
     for (const LayerBits& layer : layers) {
@@ -278,6 +279,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
             list.y[at] = static_cast<std::uint8_t>(y0 + (bit >> 3));
             list.z[at] = z;
             list.records[at] = &layer.block->at(bit | offset);
+            list.weight[at] = static_cast<std::uint8_t>(std::min(list.records[at]->count, 255.0));
         }
     }
     return list;
@@ -315,19 +317,42 @@ const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
     const VoxelKey r = (v - vertex_block_ * Map::kSize).array() + cube_level_;  // region coordinates, in [K, K + 7]
     const std::size_t count = list.x.size();
     if (levels_.size() < count) levels_.resize(count);
+    // With the levels, the points of H^1(v) and H^2(v) (first_counted_level).
 #if defined(LIDARSURF_SSE2)
-    const __m128i vx = bytes(r.x()), vy = bytes(r.y()), vz = bytes(r.z());
+    const __m128i vx = bytes(r.x()), vy = bytes(r.y()), vz = bytes(r.z()), one = bytes(1), two = bytes(2);
+    // Weights added with unsigned saturation per byte lane: a lane that saturates holds >= 255
+    // points, so a count compared with n_min <= 255 is exact.
+    __m128i in1 = _mm_setzero_si128(), in2 = _mm_setzero_si128();
     for (std::size_t c = 0; c < count; c += kLanes) {
         const __m128i level = _mm_max_epu8(axis_level(&list.x[c], vx), _mm_max_epu8(axis_level(&list.y[c], vy), axis_level(&list.z[c], vz)));
         _mm_storeu_si128(reinterpret_cast<__m128i*>(&levels_[c]), level);
+        const __m128i weight = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&list.weight[c]));
+        in1 = _mm_adds_epu8(in1, _mm_and_si128(_mm_cmpeq_epi8(level, one), weight));                      // level 1
+        in2 = _mm_adds_epu8(in2, _mm_and_si128(_mm_cmpeq_epi8(_mm_min_epu8(level, two), level), weight));  // level <= 2
     }
+    const __m128i sums1 = _mm_sad_epu8(in1, _mm_setzero_si128()), sums2 = _mm_sad_epu8(in2, _mm_setzero_si128());
+    count1_ = _mm_cvtsi128_si32(sums1) + _mm_extract_epi16(sums1, 4);
+    count2_ = _mm_cvtsi128_si32(sums2) + _mm_extract_epi16(sums2, 4);
 #else
-    for (std::size_t c = 0; c < count; ++c)
-        levels_[c] = static_cast<std::uint8_t>(std::max({axis_level(list.x[c], r.x()), axis_level(list.y[c], r.y()), axis_level(list.z[c], r.z())}));
+    count1_ = count2_ = 0;
+    for (std::size_t c = 0; c < count; ++c) {
+        const int level = std::max({axis_level(list.x[c], r.x()), axis_level(list.y[c], r.y()), axis_level(list.z[c], r.z())});
+        levels_[c] = static_cast<std::uint8_t>(level);
+        if (level == 1) count1_ += list.weight[c];
+        if (level <= 2) count2_ += list.weight[c];
+    }
 #endif
     level_vertex_ = v;
     levels_valid_ = true;
     return levels_.data();
+}
+
+int NeighbourhoodWindow::first_counted_level(const VoxelKey& v, int n_min) const {
+    if (n_min > 255) return 1;  // the weights saturate at 255
+    levels(v);
+    if (count1_ >= n_min) return 1;
+    if (count2_ >= n_min || cube_level_ < 2) return 2;
+    return 3;
 }
 
 void NeighbourhoodWindow::add_listed(const VoxelKey& v, int k, bool whole, Moments& acc) const {

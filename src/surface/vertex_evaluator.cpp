@@ -52,15 +52,18 @@ namespace {
 // grow one accumulator shell by shell. `slab_of(level, first, e)` gives those of the slab
 // S^level(v) extended by e (slab fallback, radial slabs), called with consecutive levels from the
 // first slab level (`first`) and the same e, so it may grow its own accumulator likewise.
+// `first_level`: the adaptive loop starts there (the levels below are known to fail Eq. (1) on
+// the count, and a level failing on the count never switches to slabs, so skipping them changes
+// nothing); stats_of is then first called with it.
 template <typename StatsOf, typename SlabOf>
 VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vector3d& position, const ReconstructionConfig& config,
-                          const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
+                          const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver, int first_level = 1) {
     if (!config.adaptive())  // CN, CN+GC: only H^k.
         return evaluate_level(stats_of(config.k), config.k, position, config, sensor_local, min_lambda2, solver);
     // AN, AN+GC: the smallest k in [1, k_max] that satisfies the conditions.
     int slab_start = 0;  // the level at which v switched to slabs (0: not yet)
     SlabExtension extension;  // the slabs' radial extension, set at the switch
-    for (int level = 1; level <= config.k_max; ++level) {
+    for (int level = first_level; level <= config.k_max; ++level) {
         if (slab_start == 0) {
             const VoxelStats& cube = stats_of(level);
             const VertexSample s = evaluate_level(cube, level, position, config, sensor_local, min_lambda2, solver);
@@ -137,8 +140,11 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
         return m.to_stats(position);
     };
     Moments acc, slab;
+    // The adaptive modes start at the first level whose cube can hold N_min points, summed whole,
+    // then grow shell by shell (docs/method.md, "Levels that fail on the count").
+    const int counted = config.adaptive() ? window.first_counted_level(v, config.n_min) : 1;
     auto stats_of = [&](int level) {
-        if (config.adaptive())
+        if (config.adaptive() && level > counted)
             window.grow(v, level, acc);
         else
             acc = window.box(v, level);
@@ -151,7 +157,7 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
             window.grow_slab(v, level, slab, e);
         return stats(slab);
     };
-    return choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver);
+    return choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver, counted);
 }
 
 }  // namespace lidarsurf

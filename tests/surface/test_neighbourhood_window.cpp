@@ -4,6 +4,7 @@
 // evaluate_vertex, for both eigen solvers, far from the world origin and across block borders.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 
 #include "lidarsurf/core/errors.hpp"
@@ -204,6 +205,52 @@ TEST(NeighbourhoodWindow, WindowsSharingTheirBlocksListSumTheSame) {
             }
         }
     }
+}
+
+// The level the adaptive loop starts from: against the counts of merge_neighbourhood, on sparse
+// and on dense voxels (over 255 points each: the window counts with weights saturated at 255).
+TEST(NeighbourhoodWindow, FirstCountedLevelIsTheFirstLevelWithNMinPoints) {
+    const double alpha = 0.2;
+    VoxelGrid dense(alpha);
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 40000; ++i) {  // ~400 points per voxel in a 5 x 5 x 4 patch, a few sparse ones around
+        const bool sparse = i % 100 == 0;
+        const double span = sparse ? 3.0 : 1.0;
+        dense.insert(Eigen::Vector3d(u(rng) * span - 0.5 * span, u(rng) * span - 0.5 * span, 0.8 * u(rng) - 0.4));
+    }
+    // Lone voxels with counts about the saturation, 3 voxels apart (their H^1 and H^2 hold only them).
+    const int counts[] = {200, 254, 255, 256, 300, 600};
+    for (int c = 0; c < 6; ++c)
+        for (int i = 0; i < counts[c]; ++i)
+            dense.insert(Eigen::Vector3d((-8.5 + 3 * c + 0.5 * u(rng)) * alpha, (8.3 + 0.4 * u(rng)) * alpha, 0.5 * alpha));
+    const VoxelGrid wavy = wavy_grid(alpha);
+    std::size_t checked = 0, by_level[4] = {};
+    for (const VoxelGrid* grid : std::array<const VoxelGrid*, 2>{&wavy, &dense}) {
+        const PackedVoxels packed(*grid);
+        for (int z = -3; z <= 3; ++z)
+            for (int y = -9; y <= 9; ++y)
+                for (int x = -9; x <= 9; ++x) {
+                    const VoxelKey v(x, y, z);
+                    for (int cube_level : {5, 2, 1}) {
+                        const NeighbourhoodWindow window(packed, vertex_block(v), 5, cube_level);
+                        for (int n_min : {1, 10, 37, 255, 256, 1000}) {
+                            int expected = 1;
+                            if (n_min <= 255) {  // above, the window does not count: it starts at level 1
+                                const int highest = std::min(3, cube_level + 1);
+                                while (expected < highest &&
+                                       merge_neighbourhood(*grid, v, expected).count < static_cast<std::uint64_t>(n_min))
+                                    ++expected;
+                            }
+                            ASSERT_EQ(window.first_counted_level(v, n_min), expected) << describe(v, 0) << " n_min " << n_min << " cube_level " << cube_level;
+                            ++checked;
+                            ++by_level[expected];
+                        }
+                    }
+                }
+    }
+    EXPECT_GT(checked, 10000u);
+    for (int level = 1; level <= 3; ++level) EXPECT_GT(by_level[level], 100u) << "level " << level;  // every outcome occurs
 }
 
 TEST(NeighbourhoodWindow, RefusesInconsistentLevels) {

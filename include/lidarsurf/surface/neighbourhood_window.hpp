@@ -52,6 +52,7 @@ public:
     /// coordinates beyond every level.
     struct VoxelList {
         std::vector<std::uint8_t> x, y, z;
+        std::vector<std::uint8_t> weight;  ///< the voxel's point count, saturated at 255 (padding: 0)
         std::vector<const PackedVoxels::Voxel*> records;
     };
     /// The voxel list of one vertex block, for the windows of that block to share, whatever their
@@ -87,6 +88,11 @@ public:
     void grow(const VoxelKey& v, int k, Moments& acc) const;
     /// Moments of the whole H^k(v) about v's position.
     Moments box(const VoxelKey& v, int k) const;
+    /// The first level the adaptive loop needs to sum for v: 1 if H^1(v) holds n_min points, else
+    /// 2 if H^2(v) does (or cube_level is 1), else 3. The levels below it fail Eq. (1) on the count
+    /// alone, so the loop may start there with box() instead of growing shell by shell through
+    /// them. Counted with the levels (n_min <= 255; larger n_min gives 1).
+    int first_counted_level(const VoxelKey& v, int n_min) const;
     /// Moments of the whole slab S^k(v) extended by e (neighbourhood.hpp's slab_box) about v's
     /// position; k + max(e) must be <= max_level. Every method throws InvalidArgument for a box
     /// beyond the window's blocks.
@@ -147,6 +153,7 @@ private:
     // The levels for vertex level_vertex_, while levels_valid_.
     mutable std::vector<std::uint8_t> levels_;
     mutable VoxelKey level_vertex_;
+    mutable int count1_ = 0, count2_ = 0;  // points of H^1(level_vertex_), of H^2(level_vertex_)
     mutable bool levels_valid_ = false;
 };
 
