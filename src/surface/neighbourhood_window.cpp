@@ -323,10 +323,14 @@ const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
     // Weights added with unsigned saturation per byte lane: a lane that saturates holds >= 255
     // points, so a count compared with n_min <= 255 is exact.
     __m128i in1 = _mm_setzero_si128(), in2 = _mm_setzero_si128();
+    // The arrays through local pointers: a store through levels (bytes may alias anything) would
+    // otherwise make the compiler reload every vector's data pointer in each iteration.
+    const std::uint8_t *xs = list.x.data(), *ys = list.y.data(), *zs = list.z.data(), *weights = list.weight.data();
+    std::uint8_t* out = levels_.data();
     for (std::size_t c = 0; c < count; c += kLanes) {
-        const __m128i level = _mm_max_epu8(axis_level(&list.x[c], vx), _mm_max_epu8(axis_level(&list.y[c], vy), axis_level(&list.z[c], vz)));
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(&levels_[c]), level);
-        const __m128i weight = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&list.weight[c]));
+        const __m128i level = _mm_max_epu8(axis_level(xs + c, vx), _mm_max_epu8(axis_level(ys + c, vy), axis_level(zs + c, vz)));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c), level);
+        const __m128i weight = _mm_loadu_si128(reinterpret_cast<const __m128i*>(weights + c));
         in1 = _mm_adds_epu8(in1, _mm_and_si128(_mm_cmpeq_epi8(level, one), weight));                      // level 1
         in2 = _mm_adds_epu8(in2, _mm_and_si128(_mm_cmpeq_epi8(_mm_min_epu8(level, two), level), weight));  // level <= 2
     }
