@@ -317,8 +317,34 @@ public:
     /// Vertex v's sample (nullptr if undefined), evaluating it if nobody has.
     const VertexSample* sample(const VoxelKey& v) {
         // The block exists and is not const: the accessor only caches it.
-        std::atomic_ref<std::int32_t> slot(*const_cast<std::int32_t*>(values_.find(v)));
-        std::int32_t state = slot.load(std::memory_order_acquire);
+        std::int32_t& slot = *const_cast<std::int32_t*>(values_.find(v));
+        // Most calls find the vertex already evaluated (two thirds on a lidar frame): answered
+        // inline, the evaluation (with its large stack frame) only when needed.
+        const std::int32_t state = std::atomic_ref<std::int32_t>(slot).load(std::memory_order_acquire);
+        if (state >= 0) [[likely]]
+            return &s_.defined[static_cast<std::size_t>(state)].sample;
+        if (state == kUndefined) return nullptr;
+        return claim_or_wait(v, slot, state);
+    }
+    /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
+    /// undefined corner cannot be active, so they are evaluated lazily, stopping at the first
+    /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
+    /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
+    /// only on their values, so the set of evaluated vertices does not depend on the order.
+    bool corners(const VoxelKey& cube, CornerSamples& s) {
+        // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
+        const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
+        if (!(s[even] = sample(even_corner(cube))) || !(s[7 ^ even] = sample(odd_corner(cube)))) return false;
+        for (int c = 0; c < 8; ++c)
+            if (c != even && c != (7 ^ even) && !(s[c] = sample(corner(cube, c)))) return false;
+        return true;
+    }
+
+private:
+    // sample() for a vertex not evaluated yet (`state` kUnevaluated) or being evaluated by
+    // another thread (kBusy): claims and evaluates it, or waits for its value.
+    [[gnu::noinline]] const VertexSample* claim_or_wait(const VoxelKey& v, std::int32_t& slot_ref, std::int32_t state) {
+        std::atomic_ref<std::int32_t> slot(slot_ref);
         if (state == kUnevaluated && slot.compare_exchange_strong(state, kBusy, std::memory_order_acq_rel)) {
             state = kUndefined;
             if (const std::optional<TsdfField::Known> known = reusable(v)) {
@@ -338,21 +364,6 @@ public:
         }
         return state >= 0 ? &s_.defined[static_cast<std::size_t>(state)].sample : nullptr;
     }
-    /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
-    /// undefined corner cannot be active, so they are evaluated lazily, stopping at the first
-    /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
-    /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
-    /// only on their values, so the set of evaluated vertices does not depend on the order.
-    bool corners(const VoxelKey& cube, CornerSamples& s) {
-        // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
-        const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
-        if (!(s[even] = sample(even_corner(cube))) || !(s[7 ^ even] = sample(odd_corner(cube)))) return false;
-        for (int c = 0; c < 8; ++c)
-            if (c != even && c != (7 ^ even) && !(s[c] = sample(corner(cube, c)))) return false;
-        return true;
-    }
-
-private:
     // Keeps v's sample in the thread's run of the store (claiming a new run when it is full) and
     // returns its index there.
     std::int32_t store(const VoxelKey& v, const VertexSample& sample) {
