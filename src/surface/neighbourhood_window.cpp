@@ -366,10 +366,12 @@ void NeighbourhoodWindow::add_listed(const VoxelKey& v, int k, bool whole, Momen
     const std::size_t count = list.x.size();
     const PackedVoxels::Voxel* const* records = list.records.data();
 #if defined(LIDARSURF_SSE2)
-    const __m128i kk = bytes(k);
+    // The voxels with lo <= level <= k (lo: 1 for the whole cube, k for the shell), i.e. those whose
+    // level is unchanged when clamped to [lo, k]: one test for both cases.
+    const __m128i kk = bytes(k), lo = bytes(whole ? 1 : k);
     for (std::size_t c = 0; c < count; c += kLanes) {
         const __m128i level = _mm_loadu_si128(reinterpret_cast<const __m128i*>(levels + c));
-        const __m128i hit = whole ? _mm_cmpeq_epi8(_mm_min_epu8(level, kk), level) : _mm_cmpeq_epi8(level, kk);
+        const __m128i hit = _mm_cmpeq_epi8(_mm_min_epu8(_mm_max_epu8(level, lo), kk), level);
         for (auto bits = static_cast<unsigned>(_mm_movemask_epi8(hit)); bits; bits &= bits - 1)
             sums.add(*records[c + static_cast<std::size_t>(std::countr_zero(bits))]);
     }
