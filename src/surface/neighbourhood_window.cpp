@@ -183,13 +183,12 @@ void NeighbourhoodWindow::for_each_block(const VoxelKey& l, const VoxelKey& h, F
 }
 
 void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p,
-                                    Moments& acc, bool caps) const {
+                                    Moments& acc) const {
     constexpr int B = Map::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
     if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
         throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");
-    // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z]
-    // (every layer without caps).
+    // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z].
     const VoxelKey il = l.array() + inset, ih = h.array() - inset;
     RawSums sums(acc, p);
     for_each_block(l, h, [&](const PackedVoxels::Block& block, const VoxelKey& b, unsigned layers, std::uint64_t full) {
@@ -199,7 +198,7 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
         if (inset > 0 && hx0 <= hx1 && hy0 <= hy1) ring &= ~layer_mask(hx0 & m, hx1 & m, hy0 & m, hy1 & m);
         for (; layers; layers &= layers - 1) {
             const int layer = std::countr_zero(layers), z = b.z() * B + layer;
-            const bool cap = inset == 0 || (caps && (z == l.z() || z == h.z()));
+            const bool cap = inset == 0 || z == l.z() || z == h.z();
             for (std::uint64_t bits = (*block.occupancy)[static_cast<std::size_t>(layer)] & (cap ? full : ring); bits; bits &= bits - 1)
                 sums.add(block.at(std::countr_zero(bits) | (layer << 6)));
         }
@@ -212,10 +211,6 @@ void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool 
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
     if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
         throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");
-    // Bits a..b of a byte (x within a row), and bytes a..b of a word (rows y within a layer).
-    auto bit_range = [](int a, int b) -> std::uint64_t { return (0xffu >> (m - (b - a))) << a; };
-    auto byte_range = [](int a, int b) { return (~std::uint64_t{0} >> (8 * (m - (b - a)))) << (8 * a); };
-    constexpr std::uint64_t kEveryRow = 0x0101010101010101ull;
     RawSums sums(acc, p);
     const int bx0 = l.x() / B, bx1 = h.x() / B;
     for (int bz = l.z() / B; bz <= h.z() / B; ++bz) {
@@ -223,17 +218,17 @@ void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool 
         const int z0 = std::max(l.z(), bz * B) & m, z1 = std::min(h.z(), bz * B + m) & m;
         const unsigned slab_layers = (0xffu >> (m - (z1 - z0))) << z0;
         for (int by = l.y() / B; by <= h.y() / B; ++by) {
-            const std::uint64_t rows = byte_range(std::max(l.y(), by * B) & m, std::min(h.y(), by * B + m) & m);
+            const std::uint64_t rows = layer_rows(std::max(l.y(), by * B) & m, std::min(h.y(), by * B + m) & m);
             const int hy0 = std::max(l.y() + 1, by * B), hy1 = std::min(h.y() - 1, by * B + m);
-            const std::uint64_t hole_rows = ring && hy0 <= hy1 ? byte_range(hy0 & m, hy1 & m) : 0;
+            const std::uint64_t hole_rows = ring && hy0 <= hy1 ? layer_rows(hy0 & m, hy1 & m) : 0;
             for (int bx = bx0; bx <= bx1; ++bx) {
                 const PackedVoxels::Block* block = this->block(bx, by, bz);
                 if (!block) continue;
                 unsigned layers = block->layers & slab_layers;
                 if (!layers) continue;
-                std::uint64_t mask = bit_range(std::max(l.x(), bx * B) & m, std::min(h.x(), bx * B + m) & m) * kEveryRow & rows;
+                std::uint64_t mask = layer_columns(std::max(l.x(), bx * B) & m, std::min(h.x(), bx * B + m) & m) & rows;
                 const int hx0 = std::max(l.x() + 1, bx * B), hx1 = std::min(h.x() - 1, bx * B + m);
-                if (hole_rows && hx0 <= hx1) mask &= ~(bit_range(hx0 & m, hx1 & m) * kEveryRow & hole_rows);
+                if (hole_rows && hx0 <= hx1) mask &= ~(layer_columns(hx0 & m, hx1 & m) & hole_rows);
                 for (; layers; layers &= layers - 1) {
                     const int layer = std::countr_zero(layers);
                     for (std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(layer)] & mask; bits; bits &= bits - 1)

@@ -21,13 +21,13 @@
 
 namespace lidarsurf {
 
-/// Bits x0..x1 of each of the rows y0..y1 of an 8x8 layer (bit x + 8 y, the layout of
-/// VoxelGrid::Occupancy and BlockMask), 0 <= x0 <= x1 < 8, 0 <= y0 <= y1 < 8.
-inline std::uint64_t layer_mask(int x0, int x1, int y0, int y1) {
-    const std::uint64_t row = (0xffu >> (7 - (x1 - x0))) << x0;
-    const std::uint64_t rows = (~std::uint64_t{0} >> (8 * (7 - (y1 - y0)))) << (8 * y0);  // bytes y0..y1
-    return (row * 0x0101010101010101ull) & rows;
-}
+/// Bits x0..x1 of every row of an 8x8 layer (bit x + 8 y, the layout of VoxelGrid::Occupancy and
+/// BlockMask), 0 <= x0 <= x1 < 8.
+inline std::uint64_t layer_columns(int x0, int x1) { return ((0xffu >> (7 - (x1 - x0))) << x0) * 0x0101010101010101ull; }
+/// All the bits of the rows y0..y1 of an 8x8 layer (bytes y0..y1), 0 <= y0 <= y1 < 8.
+inline std::uint64_t layer_rows(int y0, int y1) { return (~std::uint64_t{0} >> (8 * (7 - (y1 - y0)))) << (8 * y0); }
+/// Bits x0..x1 of each of the rows y0..y1 of an 8x8 layer.
+inline std::uint64_t layer_mask(int x0, int x1, int y0, int y1) { return layer_columns(x0, x1) & layer_rows(y0, y1); }
 
 class VoxelGrid {
 public:

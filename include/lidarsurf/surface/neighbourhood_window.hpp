@@ -22,8 +22,8 @@
 // without its per-block and per-layer bookkeeping, which was most of a shell's cost on lidar
 // frames (docs/benchmarks.md, session 16). The list depends only on the voxels, the vertex block
 // and K, so the windows of one vertex block, on any thread, may share it (SharedList). Slabs
-// keep add_shell: a list of their wider region (radial extensions) cost more to build than the
-// bookkeeping it saved.
+// keep a walk over the blocks (add_slab): a list of their wider region (radial extensions) cost
+// more to build than the bookkeeping it saved (session 16).
 #include <atomic>
 #include <cstdint>
 #include <vector>
@@ -105,14 +105,14 @@ public:
 
 private:
     // Adds the voxels of the box lo <= key <= hi (inclusive) to acc, without its interior box
-    // [lo + inset, hi - inset] when inset > 0 (a shell; with `caps` false the hole runs through
-    // every layer: the x-y ring of a slab). The general path, for what the list does not cover.
-    void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc, bool caps = true) const;
-    // add_shell for a slab (two layers, hi.z = lo.z + 1; `ring`: without the x-y interior
-    // [lo + 1, hi - 1], on both layers, as add_shell with inset 1 and no caps): the same voxels in
-    // the same order (so the same bits), with the box's row and column masks computed once per
-    // block row and column instead of per block and layer (slabs reach 3 to 4 blocks along their
-    // radial axis, and their bookkeeping was most of add_shell's cost on lidar frames).
+    // [lo + inset, hi - inset] when inset > 0 (a shell). The general path, for the cubes the list
+    // does not cover.
+    void add_shell(const VoxelKey& lo, const VoxelKey& hi, int inset, const Eigen::Vector3d& p, Moments& acc) const;
+    // The same walk for a slab (two layers, hi.z = lo.z + 1; `ring`: without the x-y interior
+    // [lo + 1, hi - 1] on both layers, the ring S^k \ S^{k-1}): blocks z, y, x, then layers, then
+    // rows, as add_shell, with the box's row and column masks computed once per block row and
+    // column instead of per block and layer (slabs reach 3 to 4 blocks along their radial axis,
+    // and that bookkeeping was most of the walk's cost on lidar frames).
     void add_slab(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const;
     // Calls f(block, b, layers, full) for each window block b = (bx, by, bz) whose layers within
     // the box [l, h] (window coordinates) hold voxels, in the order z, y, x: `layers` has bit z
