@@ -114,12 +114,9 @@ public:
 
     void process_cube(const VoxelKey& base) {
         std::array<const VertexSample*, 8> s{};
+        if (!lookup_.corners(base, s)) return;  // only cubes whose 8 corners are defined
         unsigned config = 0;  // bit c: corner c is negative (zero counts as positive: outside)
-        for (int c = 0; c < 8; ++c) {
-            s[c] = lookup_.find(base + corner_offset(c));
-            if (!s[c]) return;  // only cubes whose 8 corners are defined
-            config |= static_cast<unsigned>(s[c]->tsdf < 0) << c;
-        }
+        for (int c = 0; c < 8; ++c) config |= static_cast<unsigned>(s[c]->tsdf < 0) << c;
         if (config == 0 || config == 255) return;
 
         const CubeTables& t = tables_;

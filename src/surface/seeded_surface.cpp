@@ -236,11 +236,7 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
     // Every vertex is already evaluated.
     struct FieldView {
         TsdfField::Accessor values;
-        bool corners(const VoxelKey& cube, CornerSamples& s) {
-            for (int c = 0; c < 8; ++c)
-                if (!(s[c] = values.find(corner(cube, c)))) return false;
-            return true;
-        }
+        bool corners(const VoxelKey& cube, CornerSamples& s) { return values.corners(cube, s); }
     };
     return search.run(true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {});
 }

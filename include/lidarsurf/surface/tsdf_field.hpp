@@ -2,6 +2,7 @@
 // The TSDF over the grid vertices near the data (Sec. III-C). Evaluated vertices are those whose
 // largest neighbourhood H^{k_max}(v) contains at least one occupied voxel; every other vertex stays
 // undefined (see docs/method.md for the reason).
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -41,6 +42,24 @@ public:
         explicit Accessor(const TsdfField& field) : field_(field), index_(field.index_) {}
         const VertexSample* find(const VoxelKey& v) { return field_.sample_at(index_.find(v)); }
         Known known(const VoxelKey& v) { return field_.known_at(index_.find(v)); }
+        /// The samples of the corners of the cube with minimum corner `base` (corner c at base +
+        /// (c & 1, c >> 1 & 1, c >> 2)); false, `s` partly set, at the first undefined one. A cube
+        /// whose corners share its block (7 in 8 per axis) costs one block lookup, not eight.
+        bool corners(const VoxelKey& base, std::array<const VertexSample*, 8>& s) {
+            constexpr int m = BlockMap<std::int32_t>::kSize - 1;
+            if ((base.x() & m) != m && (base.y() & m) != m && (base.z() & m) != m) {
+                const std::int32_t* slot = index_.find(base);
+                if (!slot) return false;
+                constexpr int kSize = BlockMap<std::int32_t>::kSize;
+                for (int c = 0; c < 8; ++c)
+                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + (c & 1) + kSize * ((c >> 1) & 1) + kSize * kSize * (c >> 2))))
+                        return false;
+                return true;
+            }
+            for (int c = 0; c < 8; ++c)
+                if (!(s[static_cast<std::size_t>(c)] = find(base + VoxelKey(c & 1, (c >> 1) & 1, c >> 2)))) return false;
+            return true;
+        }
 
     private:
         const TsdfField& field_;
