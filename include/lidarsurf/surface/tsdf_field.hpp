@@ -46,18 +46,19 @@ public:
         /// (c & 1, c >> 1 & 1, c >> 2)); false, `s` partly set, at the first undefined one. A cube
         /// whose corners share its block (7 in 8 per axis) costs one block lookup, not eight.
         bool corners(const VoxelKey& base, std::array<const VertexSample*, 8>& s) {
-            constexpr int m = BlockMap<std::int32_t>::kSize - 1;
+            using Index = BlockMap<std::int32_t>;
+            constexpr int m = Index::kSize - 1;
+            auto step = [](int c) { return VoxelKey(c & 1, (c >> 1) & 1, c >> 2); };
             if ((base.x() & m) != m && (base.y() & m) != m && (base.z() & m) != m) {
+                // Within the block, corner c's slot is base's plus the block offset of its step.
                 const std::int32_t* slot = index_.find(base);
                 if (!slot) return false;
-                constexpr int kSize = BlockMap<std::int32_t>::kSize;
                 for (int c = 0; c < 8; ++c)
-                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + (c & 1) + kSize * ((c >> 1) & 1) + kSize * kSize * (c >> 2))))
-                        return false;
+                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + Index::offset_of(step(c))))) return false;
                 return true;
             }
             for (int c = 0; c < 8; ++c)
-                if (!(s[static_cast<std::size_t>(c)] = find(base + VoxelKey(c & 1, (c >> 1) & 1, c >> 2)))) return false;
+                if (!(s[static_cast<std::size_t>(c)] = find(base + step(c)))) return false;
             return true;
         }
 
