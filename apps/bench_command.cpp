@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/point_writer.hpp"
 #include "lidarsurf/sim/procedural_scene.hpp"
@@ -351,6 +352,8 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     b->add_flag("--no-imls", o.no_imls, "Skip IMLS");
     b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables and the incremental re-meshing table");
     b->add_option("--json", o.json, "Also write every row (all run times) as JSON");
+    b->add_option("--simd", o.simd, "Vector instructions of the fast path's list scans: sse2 | avx2 (default: the widest this CPU has; "
+                                    "to compare them within one run)");
     add_reconstruct_options(b, o.reconstruct);
     b->footer("Example:\n  lidarsurf bench                      # simulated town frames\n"
               "  lidarsurf bench ../shared/data/kitti/*.bin --repeat 11");
@@ -363,6 +366,7 @@ int run_bench(const BenchOptions& o) {
     if (o.frames < 1 || o.frames > 100) throw InvalidArgument("--frames must be in [1, 100]");
     const Method method = resolve_method(o.reconstruct);
     const int threads = method.config.threads;  // 0 = all cores
+    if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
 
     std::vector<std::pair<fs::path, std::string>> scans, sizes;
     fs::path tmp;
@@ -427,7 +431,7 @@ int run_bench(const BenchOptions& o) {
         const double steal = end.total > start.total ? 100.0 * (end.steal - start.steal) / (end.total - start.total) : 0.0;
         char steal_text[64];
         std::snprintf(steal_text, sizeof steal_text, "; CPU time stolen by the hypervisor during the run %.1f %%", steal);
-        const std::string machine = machine_description() + steal_text;
+        const std::string machine = machine_description() + steal_text + "; SIMD " + to_string(simd_level());
         std::printf("machine: %s\n", machine.c_str());
         std::printf("total = read + insert + tsdf + mesh (IMLS: insert = normals, tsdf = implicit function)\n\n");
         std::fputs(format_rows(rows, true).c_str(), stdout);

@@ -14,9 +14,29 @@
 #include <Eigen/Geometry>
 #include <unistd.h>
 
+#include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 
 namespace lidarsurf::test {
+
+/// Every SimdLevel this build can run on this CPU (core/simd.hpp), narrowest first.
+inline std::vector<SimdLevel> simd_levels() {
+    std::vector<SimdLevel> out;
+    for (int l = static_cast<int>(minimum_simd_level()); l <= static_cast<int>(supported_simd_level()); ++l)
+        out.push_back(static_cast<SimdLevel>(l));
+    return out;
+}
+/// Runs the scope at `level`, then restores the level in force before.
+class ScopedSimdLevel {
+public:
+    explicit ScopedSimdLevel(SimdLevel level) : before_(simd_level()) { set_simd_level(level); }
+    ~ScopedSimdLevel() { set_simd_level(before_); }
+    ScopedSimdLevel(const ScopedSimdLevel&) = delete;
+    ScopedSimdLevel& operator=(const ScopedSimdLevel&) = delete;
+
+private:
+    SimdLevel before_;
+};
 
 /// Two-pass mean and population covariance: the oracle for the incremental statistics.
 struct DirectStats {

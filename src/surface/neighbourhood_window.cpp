@@ -9,11 +9,12 @@
 // The SSE2 code (x86-64's baseline) unless LIDARSURF_SCALAR asks for the portable code.
 #if defined(__SSE2__) && !defined(LIDARSURF_SCALAR)
 #define LIDARSURF_SSE2 1
-#include <emmintrin.h>
+#include <immintrin.h>
 #endif
 
 #include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 
 namespace lidarsurf {
@@ -122,6 +123,112 @@ inline __m128i bytes(int value) { return _mm_set1_epi8(static_cast<char>(value))
 #else
 inline int axis_level(int i, int v) { return std::max(v, i + 1) - std::min(v, i); }
 #endif
+
+// The two scans of a voxel list (NeighbourhoodWindow::levels and add_listed), one kernel per
+// SimdLevel (core/simd.hpp). The arrays come as local pointers: a byte store may alias anything,
+// so through the vectors the compiler would reload every data pointer in each iteration.
+struct ListArrays {
+    const std::uint8_t *x, *y, *z, *weight;
+    const PackedVoxels::Voxel* const* records;
+    std::size_t count;  // a multiple of kLanes
+};
+ListArrays arrays_of(const NeighbourhoodWindow::VoxelList& l) {
+    return {l.x.data(), l.y.data(), l.z.data(), l.weight.data(), l.records.data(), l.x.size()};
+}
+// The points (weights saturated at 255) of the entries with level 1 and with level <= 2.
+struct LevelCounts {
+    int in1 = 0, in2 = 0;
+};
+
+#if defined(LIDARSURF_SSE2)
+// Weights are added with unsigned saturation per byte lane: a lane that saturates holds >= 255
+// points, so a count compared with n_min <= 255 is exact, whatever the lanes' number.
+inline int sum_bytes(__m128i v) {
+    const __m128i s = _mm_sad_epu8(v, _mm_setzero_si128());
+    return _mm_cvtsi128_si32(s) + _mm_extract_epi16(s, 4);
+}
+// Levels of the 16 entries at c into out + c; their weights into in1 (level 1), in2 (level <= 2).
+inline void levels16(const ListArrays& l, std::size_t c, const VoxelKey& r, std::uint8_t* out, __m128i& in1, __m128i& in2) {
+    const __m128i level = _mm_max_epu8(axis_level(l.x + c, bytes(r.x())), _mm_max_epu8(axis_level(l.y + c, bytes(r.y())), axis_level(l.z + c, bytes(r.z()))));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c), level);
+    const __m128i weight = _mm_loadu_si128(reinterpret_cast<const __m128i*>(l.weight + c));
+    in1 = _mm_adds_epu8(in1, _mm_and_si128(_mm_cmpeq_epi8(level, bytes(1)), weight));
+    in2 = _mm_adds_epu8(in2, _mm_and_si128(_mm_cmpeq_epi8(_mm_min_epu8(level, bytes(2)), level), weight));
+}
+LevelCounts levels_sse2(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
+    __m128i in1 = _mm_setzero_si128(), in2 = _mm_setzero_si128();
+    for (std::size_t c = 0; c < l.count; c += kLanes) levels16(l, c, r, out, in1, in2);
+    return {sum_bytes(in1), sum_bytes(in2)};
+}
+// The entries with lo <= level <= k (lo: 1 for the whole cube, k for the shell), i.e. those
+// whose level is unchanged when clamped to [lo, k]: one test for both cases. Added in list order.
+inline void add16(const std::uint8_t* levels, const PackedVoxels::Voxel* const* records, std::size_t c, int lo, int k, RawSums& sums) {
+    const __m128i level = _mm_loadu_si128(reinterpret_cast<const __m128i*>(levels + c));
+    const __m128i hit = _mm_cmpeq_epi8(_mm_min_epu8(_mm_max_epu8(level, bytes(lo)), bytes(k)), level);
+    for (auto bits = static_cast<unsigned>(_mm_movemask_epi8(hit)); bits; bits &= bits - 1)
+        sums.add(*records[c + static_cast<std::size_t>(std::countr_zero(bits))]);
+}
+void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
+    RawSums sums(acc, p);
+    for (std::size_t c = 0; c < l.count; c += kLanes) add16(levels, l.records, c, lo, k, sums);
+    sums.store(acc);
+}
+
+// The same 32 entries per compare; a list of an odd number of 16-entry chunks ends with one
+// chunk of the SSE2 code. Integer compares only, and the additions are RawSums' in list order:
+// the same bits as the SSE2 kernels (no FMA is enabled here).
+[[gnu::target("avx2")]] inline __m256i bytes32(int value) { return _mm256_set1_epi8(static_cast<char>(value)); }
+[[gnu::target("avx2")]] inline __m256i axis_level32(const std::uint8_t* i, __m256i v) {
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i));
+    return _mm256_sub_epi8(_mm256_max_epu8(v, _mm256_add_epi8(c, bytes32(1))), _mm256_min_epu8(v, c));
+}
+[[gnu::target("avx2")]] LevelCounts levels_avx2(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
+    const __m256i vx = bytes32(r.x()), vy = bytes32(r.y()), vz = bytes32(r.z()), one = bytes32(1), two = bytes32(2);
+    __m256i in1 = _mm256_setzero_si256(), in2 = _mm256_setzero_si256();
+    std::size_t c = 0;
+    for (; c + 2 * kLanes <= l.count; c += 2 * kLanes) {
+        const __m256i level = _mm256_max_epu8(axis_level32(l.x + c, vx), _mm256_max_epu8(axis_level32(l.y + c, vy), axis_level32(l.z + c, vz)));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + c), level);
+        const __m256i weight = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(l.weight + c));
+        in1 = _mm256_adds_epu8(in1, _mm256_and_si256(_mm256_cmpeq_epi8(level, one), weight));
+        in2 = _mm256_adds_epu8(in2, _mm256_and_si256(_mm256_cmpeq_epi8(_mm256_min_epu8(level, two), level), weight));
+    }
+    __m128i tail1 = _mm_setzero_si128(), tail2 = _mm_setzero_si128();
+    if (c < l.count) levels16(l, c, r, out, tail1, tail2);
+    return {sum_bytes(_mm256_castsi256_si128(in1)) + sum_bytes(_mm256_extracti128_si256(in1, 1)) + sum_bytes(tail1),
+            sum_bytes(_mm256_castsi256_si128(in2)) + sum_bytes(_mm256_extracti128_si256(in2, 1)) + sum_bytes(tail2)};
+}
+[[gnu::target("avx2")]] void add_listed_avx2(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
+    RawSums sums(acc, p);
+    const __m256i lo32 = bytes32(lo), k32 = bytes32(k);
+    std::size_t c = 0;
+    for (; c + 2 * kLanes <= l.count; c += 2 * kLanes) {
+        const __m256i level = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(levels + c));
+        const __m256i hit = _mm256_cmpeq_epi8(_mm256_min_epu8(_mm256_max_epu8(level, lo32), k32), level);
+        for (auto bits = static_cast<unsigned>(_mm256_movemask_epi8(hit)); bits; bits &= bits - 1)
+            sums.add(*l.records[c + static_cast<std::size_t>(std::countr_zero(bits))]);
+    }
+    if (c < l.count) add16(levels, l.records, c, lo, k, sums);
+    sums.store(acc);
+}
+#else
+LevelCounts levels_portable(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
+    LevelCounts n;
+    for (std::size_t c = 0; c < l.count; ++c) {
+        const int level = std::max({axis_level(l.x[c], r.x()), axis_level(l.y[c], r.y()), axis_level(l.z[c], r.z())});
+        out[c] = static_cast<std::uint8_t>(level);
+        if (level == 1) n.in1 += l.weight[c];
+        if (level <= 2) n.in2 += l.weight[c];
+    }
+    return n;
+}
+void add_listed_portable(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
+    RawSums sums(acc, p);
+    for (std::size_t c = 0; c < l.count; ++c)
+        if (levels[c] >= lo && levels[c] <= k) sums.add(*l.records[c]);
+    sums.store(acc);
+}
+#endif
 }  // namespace
 
 NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level, int cube_level)
@@ -140,6 +247,7 @@ void NeighbourhoodWindow::reset(const VoxelKey& vertex_block) {
     vertex_block_ = vertex_block;
     first_voxel_ = (vertex_block.array() - radius_) * Map::kSize;
     blocks_.assign(static_cast<std::size_t>(side_ * side_ * side_), kNotLookedUp);
+    simd_ = simd_level();
     shared_ = nullptr;
     list_ = nullptr;
     levels_valid_ = false;
@@ -310,37 +418,16 @@ const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
     const VoxelList& list = this->list();
     if (levels_valid_ && level_vertex_ == v) return levels_.data();
     const VoxelKey r = (v - vertex_block_ * Map::kSize).array() + cube_level_;  // region coordinates, in [K, K + 7]
-    const std::size_t count = list.x.size();
-    if (levels_.size() < count) levels_.resize(count);
+    const ListArrays arrays = arrays_of(list);
+    if (levels_.size() < arrays.count) levels_.resize(arrays.count);
     // With the levels, the points of H^1(v) and H^2(v) (first_counted_level).
 #if defined(LIDARSURF_SSE2)
-    const __m128i vx = bytes(r.x()), vy = bytes(r.y()), vz = bytes(r.z()), one = bytes(1), two = bytes(2);
-    // Weights added with unsigned saturation per byte lane: a lane that saturates holds >= 255
-    // points, so a count compared with n_min <= 255 is exact.
-    __m128i in1 = _mm_setzero_si128(), in2 = _mm_setzero_si128();
-    // The arrays through local pointers: a store through levels (bytes may alias anything) would
-    // otherwise make the compiler reload every vector's data pointer in each iteration.
-    const std::uint8_t *xs = list.x.data(), *ys = list.y.data(), *zs = list.z.data(), *weights = list.weight.data();
-    std::uint8_t* out = levels_.data();
-    for (std::size_t c = 0; c < count; c += kLanes) {
-        const __m128i level = _mm_max_epu8(axis_level(xs + c, vx), _mm_max_epu8(axis_level(ys + c, vy), axis_level(zs + c, vz)));
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c), level);
-        const __m128i weight = _mm_loadu_si128(reinterpret_cast<const __m128i*>(weights + c));
-        in1 = _mm_adds_epu8(in1, _mm_and_si128(_mm_cmpeq_epi8(level, one), weight));                      // level 1
-        in2 = _mm_adds_epu8(in2, _mm_and_si128(_mm_cmpeq_epi8(_mm_min_epu8(level, two), level), weight));  // level <= 2
-    }
-    const __m128i sums1 = _mm_sad_epu8(in1, _mm_setzero_si128()), sums2 = _mm_sad_epu8(in2, _mm_setzero_si128());
-    count1_ = _mm_cvtsi128_si32(sums1) + _mm_extract_epi16(sums1, 4);
-    count2_ = _mm_cvtsi128_si32(sums2) + _mm_extract_epi16(sums2, 4);
+    const LevelCounts n = simd_ == SimdLevel::Avx2 ? levels_avx2(arrays, r, levels_.data()) : levels_sse2(arrays, r, levels_.data());
 #else
-    count1_ = count2_ = 0;
-    for (std::size_t c = 0; c < count; ++c) {
-        const int level = std::max({axis_level(list.x[c], r.x()), axis_level(list.y[c], r.y()), axis_level(list.z[c], r.z())});
-        levels_[c] = static_cast<std::uint8_t>(level);
-        if (level == 1) count1_ += list.weight[c];
-        if (level <= 2) count2_ += list.weight[c];
-    }
+    const LevelCounts n = levels_portable(arrays, r, levels_.data());
 #endif
+    count1_ = n.in1;
+    count2_ = n.in2;
     level_vertex_ = v;
     levels_valid_ = true;
     return levels_.data();
@@ -356,25 +443,17 @@ int NeighbourhoodWindow::first_counted_level(const VoxelKey& v, int n_min) const
 
 void NeighbourhoodWindow::add_listed(const VoxelKey& v, int k, bool whole, Moments& acc) const {
     const std::uint8_t* levels = this->levels(v);
-    const VoxelList& list = this->list();
-    RawSums sums(acc, v.cast<double>() * alpha_);
-    const std::size_t count = list.x.size();
-    const PackedVoxels::Voxel* const* records = list.records.data();
+    const ListArrays arrays = arrays_of(list());
+    const Eigen::Vector3d p = v.cast<double>() * alpha_;
+    const int lo = whole ? 1 : k;
 #if defined(LIDARSURF_SSE2)
-    // The voxels with lo <= level <= k (lo: 1 for the whole cube, k for the shell), i.e. those whose
-    // level is unchanged when clamped to [lo, k]: one test for both cases.
-    const __m128i kk = bytes(k), lo = bytes(whole ? 1 : k);
-    for (std::size_t c = 0; c < count; c += kLanes) {
-        const __m128i level = _mm_loadu_si128(reinterpret_cast<const __m128i*>(levels + c));
-        const __m128i hit = _mm_cmpeq_epi8(_mm_min_epu8(_mm_max_epu8(level, lo), kk), level);
-        for (auto bits = static_cast<unsigned>(_mm_movemask_epi8(hit)); bits; bits &= bits - 1)
-            sums.add(*records[c + static_cast<std::size_t>(std::countr_zero(bits))]);
-    }
+    if (simd_ == SimdLevel::Avx2)
+        add_listed_avx2(arrays, levels, lo, k, p, acc);
+    else
+        add_listed_sse2(arrays, levels, lo, k, p, acc);
 #else
-    for (std::size_t c = 0; c < count; ++c)
-        if (whole ? levels[c] <= k : levels[c] == k) sums.add(*records[c]);
+    add_listed_portable(arrays, levels, lo, k, p, acc);
 #endif
-    sums.store(acc);
 }
 
 void NeighbourhoodWindow::grow(const VoxelKey& v, int k, Moments& acc) const {

@@ -11,6 +11,7 @@
 #include "lidarsurf/surface/neighbourhood.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
+#include "test_util.hpp"
 
 using namespace lidarsurf;
 
@@ -156,27 +157,32 @@ TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
 
 // The voxel list (cubes up to cube_level) adds the very records add_shell adds, in its order: a
 // window listing every level and one listing only H^1 (add_shell beyond) grow the same bits.
+// The voxel-list sums against the block walk (add_shell, no list): bit for bit, with every list
+// scan kernel this CPU runs (core/simd.hpp: SSE2 and AVX2 select the same voxels, in list order).
 TEST(NeighbourhoodWindow, ListedCubesEqualTheBlockWalkBitForBit) {
     const double alpha = 0.2;
     const VoxelGrid grid = wavy_grid(alpha);
     const PackedVoxels packed(grid);
-    std::mt19937 rng(13);
-    std::size_t nonempty = 0;
-    for (int trial = 0; trial < 300; ++trial) {
-        const VoxelKey v = random_vertex(rng);
-        const NeighbourhoodWindow listed(packed, vertex_block(v), 13, 13), walked(packed, vertex_block(v), 13, 1);
-        Moments a, b;
-        for (int k = 1; k <= 13; ++k) {
-            listed.grow(v, k, a);
-            walked.grow(v, k, b);
-            ASSERT_EQ(a.n, b.n) << describe(v, k);
-            ASSERT_TRUE(a.s1 == b.s1 && a.s2 == b.s2) << describe(v, k);  // exact: same additions, same order
-            const Moments whole_a = listed.box(v, k), whole_b = walked.box(v, k);
-            ASSERT_TRUE(whole_a.n == whole_b.n && whole_a.s1 == whole_b.s1 && whole_a.s2 == whole_b.s2) << describe(v, k);
+    for (SimdLevel level : test::simd_levels()) {
+        const test::ScopedSimdLevel scoped(level);
+        std::mt19937 rng(13);
+        std::size_t nonempty = 0;
+        for (int trial = 0; trial < 300; ++trial) {
+            const VoxelKey v = random_vertex(rng);
+            const NeighbourhoodWindow listed(packed, vertex_block(v), 13, 13), walked(packed, vertex_block(v), 13, 1);
+            Moments a, b;
+            for (int k = 1; k <= 13; ++k) {
+                listed.grow(v, k, a);
+                walked.grow(v, k, b);
+                ASSERT_EQ(a.n, b.n) << describe(v, k) << " " << to_string(level);
+                ASSERT_TRUE(a.s1 == b.s1 && a.s2 == b.s2) << describe(v, k) << " " << to_string(level);  // exact: same additions, same order
+                const Moments whole_a = listed.box(v, k), whole_b = walked.box(v, k);
+                ASSERT_TRUE(whole_a.n == whole_b.n && whole_a.s1 == whole_b.s1 && whole_a.s2 == whole_b.s2) << describe(v, k) << " " << to_string(level);
+            }
+            nonempty += a.n > 0;
         }
-        nonempty += a.n > 0;
+        EXPECT_GT(nonempty, 200u);
     }
-    EXPECT_GT(nonempty, 200u);
 }
 
 // Windows of one vertex block sharing its list (the fast path's windows on several threads):
@@ -233,6 +239,9 @@ TEST(NeighbourhoodWindow, FirstCountedLevelIsTheFirstLevelWithNMinPoints) {
                 for (int x = -9; x <= 9; ++x) {
                     const VoxelKey v(x, y, z);
                     for (int cube_level : {5, 2, 1}) {
+                        // Counted by each list scan kernel (the SSE2 and AVX2 ones saturate 16 or 32 byte lanes).
+                        const SimdLevel level = test::simd_levels()[static_cast<std::size_t>(x + y + z + 30) % test::simd_levels().size()];
+                        const test::ScopedSimdLevel scoped(level);
                         const NeighbourhoodWindow window(packed, vertex_block(v), 5, cube_level);
                         for (int n_min : {1, 10, 37, 255, 256, 1000}) {
                             int expected = 1;

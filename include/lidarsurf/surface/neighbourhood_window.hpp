@@ -31,6 +31,7 @@
 #include <Eigen/Core>
 
 #include "lidarsurf/core/packed_voxels.hpp"
+#include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 
@@ -77,7 +78,8 @@ public:
     /// list, larger ones add_shell.
     NeighbourhoodWindow(const PackedVoxels& voxels, const VoxelKey& vertex_block, int max_level, int cube_level = -1);
     /// Makes this the window of another vertex block (same voxels and levels; keeps the storage;
-    /// stops sharing its list).
+    /// stops sharing its list). The list scans use the simd_level() in force at construction or
+    /// at the last reset().
     void reset(const VoxelKey& vertex_block);
     /// Makes the window take its voxel list from `list` (that of its vertex block, with the same
     /// voxels and cube_level), or publish there the one it builds, until the next reset().
@@ -155,6 +157,7 @@ private:
     mutable VoxelKey level_vertex_;
     mutable int count1_ = 0, count2_ = 0;  // points of H^1(level_vertex_), of H^2(level_vertex_)
     mutable bool levels_valid_ = false;
+    SimdLevel simd_ = SimdLevel::Portable;  // simd_level() when the window was (re)set: which scan kernels run
 };
 
 }  // namespace lidarsurf

@@ -1,0 +1,32 @@
+#pragma once
+// Which vector instructions the fast path's byte scans use (issue 5). The voxel lists' level pass
+// and their per-level scans (NeighbourhoodWindow) compare 16 list entries per instruction with
+// SSE2, x86-64's baseline; on a CPU with AVX2 the same loops compare 32, chosen at run time, so
+// one portable binary runs the wider code where it can. The scans compare bytes and select
+// records; the additions of the records are the same operations in the same order whatever the
+// level, so every level gives the same bits (tests/core/test_simd.cpp,
+// tests/surface/test_neighbourhood_window.cpp).
+namespace lidarsurf {
+
+enum class SimdLevel {
+    Portable,  ///< the scalar code (non-x86 CPUs, and builds with LIDARSURF_SCALAR)
+    Sse2,      ///< 16 bytes per compare
+    Avx2,      ///< 32 bytes per compare
+};
+
+/// The widest level this build can run on this CPU.
+SimdLevel supported_simd_level();
+/// The narrowest level this build has: Portable with LIDARSURF_SCALAR (or off x86), else Sse2.
+SimdLevel minimum_simd_level();
+/// The level in use: supported_simd_level() unless changed by set_simd_level().
+SimdLevel simd_level();
+/// Uses `level` from now on, in every thread (tests, and `lidarsurf bench --simd` to compare the
+/// levels within one run). Throws InvalidArgument for a level outside [minimum_simd_level(),
+/// supported_simd_level()]. Not meant to be changed while a reconstruction runs.
+void set_simd_level(SimdLevel level);
+
+const char* to_string(SimdLevel level);
+/// "portable", "sse2" or "avx2"; throws InvalidArgument for anything else.
+SimdLevel simd_level_from_string(const char* name);
+
+}  // namespace lidarsurf
