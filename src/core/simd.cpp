@@ -15,7 +15,9 @@ SimdLevel detect() {
     return SimdLevel::Portable;
 #elif defined(__GNUC__)
     // The compiler's CPU check also asks the OS whether it saves the AVX registers.
-    return __builtin_cpu_supports("avx2") ? SimdLevel::Avx2 : SimdLevel::Sse2;
+    const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
+                    __builtin_cpu_supports("popcnt");
+    return v3 ? SimdLevel::Avx2 : SimdLevel::Sse2;
 #else
     return SimdLevel::Sse2;
 #endif

@@ -315,6 +315,26 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
 }
 
 void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const {
+#if defined(LIDARSURF_SSE2)
+    if (simd_ == SimdLevel::Avx2) return add_slab_v3(lo, hi, ring, p, acc);
+#endif
+    add_slab_walk<false>(lo, hi, ring, p, acc);
+}
+
+#if defined(LIDARSURF_SSE2)
+[[gnu::target("avx2,bmi,bmi2,popcnt")]] void NeighbourhoodWindow::add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring,
+                                                                             const Eigen::Vector3d& p, Moments& acc) const {
+    add_slab_walk<true>(lo, hi, ring, p, acc);
+}
+#else
+void NeighbourhoodWindow::add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const {
+    add_slab_walk<true>(lo, hi, ring, p, acc);
+}
+#endif
+
+template <bool Popcount>
+[[gnu::always_inline]] inline void NeighbourhoodWindow::add_slab_walk(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p,
+                                                                      Moments& acc) const {
     constexpr int B = Map::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
     if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
@@ -339,8 +359,12 @@ void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool 
                 if (hole_rows && hx0 <= hx1) mask &= ~(layer_columns(hx0 & m, hx1 & m) & hole_rows);
                 for (; layers; layers &= layers - 1) {
                     const int layer = std::countr_zero(layers);
-                    for (std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(layer)] & mask; bits; bits &= bits - 1)
-                        sums.add(block->at(std::countr_zero(bits) | (layer << 6)));
+                    for (std::uint64_t bits = (*block->occupancy)[static_cast<std::size_t>(layer)] & mask; bits; bits &= bits - 1) {
+                        if constexpr (Popcount)
+                            sums.add(block->at_layer_bit(layer, std::countr_zero(bits)));
+                        else
+                            sums.add(block->at(std::countr_zero(bits) | (layer << 6)));
+                    }
                 }
             }
         }

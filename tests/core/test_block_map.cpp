@@ -103,7 +103,9 @@ TEST(PackedVoxels, EveryVoxelIsFoundByRankWithItsStatistics) {
         const VoxelKey key = grid.keys()[v];
         const PackedVoxels::Block* block = packed.find(BlockMap<std::int32_t>::block_of(key));
         ASSERT_NE(block, nullptr);
-        const PackedVoxels::Voxel& r = block->at(BlockMap<std::int32_t>::offset_of(key));
+        const int offset = BlockMap<std::int32_t>::offset_of(key);
+        const PackedVoxels::Voxel& r = block->at(offset);
+        ASSERT_EQ(&block->at_layer_bit(offset >> 6, offset & 63), &r);  // the popcount rank: the same record
         const VoxelStats& s = grid.stats()[v];
         ASSERT_EQ(r.count, static_cast<double>(s.count));
         ASSERT_EQ(Eigen::Vector3d(r.mx, r.my, r.mz), s.mean);

@@ -185,6 +185,39 @@ TEST(NeighbourhoodWindow, ListedCubesEqualTheBlockWalkBitForBit) {
     }
 }
 
+// The slab walk ranks records with a byte table (SSE2, portable) or POPCNT (Avx2 level): the same
+// voxels in the same order, so the same bits, whole slabs and rings, with and without extension.
+TEST(NeighbourhoodWindow, SlabSumsAreTheSameBitsAtEverySimdLevel) {
+    const double alpha = 0.2;
+    const VoxelGrid grid = wavy_grid(alpha);
+    const PackedVoxels packed(grid);
+    const std::vector<SimdLevel> levels = test::simd_levels();
+    std::mt19937 rng(23);
+    std::size_t nonempty = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        VoxelKey v = random_vertex(rng);
+        v.z() = trial % 5 - 2;  // a slab is two layers: within the surface's +-2 voxels
+        const SlabExtension e{trial % 3 == 0 ? 8 : 0, trial % 3 == 1 ? 8 : 0};
+        std::vector<Moments> whole(levels.size()), ring(levels.size());
+        for (std::size_t l = 0; l < levels.size(); ++l) {
+            const test::ScopedSimdLevel scoped(levels[l]);
+            const NeighbourhoodWindow window(packed, vertex_block(v), 13, 5);
+            whole[l] = window.slab(v, 3, e);
+            ring[l] = whole[l];
+            window.grow_slab(v, 4, ring[l], e);
+            window.grow_slab(v, 5, ring[l], e);
+        }
+        for (std::size_t l = 1; l < levels.size(); ++l) {
+            ASSERT_TRUE(whole[l].n == whole[0].n && whole[l].s1 == whole[0].s1 && whole[l].s2 == whole[0].s2) << describe(v, 3) << " " << to_string(levels[l]);
+            ASSERT_TRUE(ring[l].n == ring[0].n && ring[l].s1 == ring[0].s1 && ring[l].s2 == ring[0].s2) << describe(v, 5) << " " << to_string(levels[l]);
+        }
+        // And the slab of the level in use against the merged statistics (the oracle).
+        expect_same_stats(whole.back().to_stats(v.cast<double>() * alpha), merge_box(grid, slab_box(v, 3, e)), alpha, describe(v, 3));
+        nonempty += whole[0].n > 0;
+    }
+    EXPECT_GT(nonempty, 60u);  // the surface lies in one or two of the five layer pairs drawn
+}
+
 // Windows of one vertex block sharing its list (the fast path's windows on several threads):
 // whichever builds it, each sums what a window with its own list does, and the list is built once.
 TEST(NeighbourhoodWindow, WindowsSharingTheirBlocksListSumTheSame) {

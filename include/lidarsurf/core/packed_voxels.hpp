@@ -6,6 +6,7 @@
 // an index load and a 104-byte VoxelStats scattered in insertion order (the two cache misses
 // that dominated the sums).
 #include <array>
+#include <bit>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -42,6 +43,13 @@ public:
             const int row = offset >> 3;
             const auto byte = static_cast<unsigned>(((*occupancy)[static_cast<std::size_t>(row >> 3)] >> (8 * (row & 7))) & 0xffu);
             return voxels[row_start[static_cast<std::size_t>(row)] + kBitCount[byte & ((1u << (offset & 7)) - 1u)]];
+        }
+        /// The same record as at(bit | layer << 6), ranked from the layer's first record and the
+        /// occupied voxels before `bit` in the layer's word: for code built with a population-count
+        /// instruction (core/simd.hpp's Avx2 level), where that is 3 instructions instead of ~20.
+        [[gnu::always_inline]] const Voxel& at_layer_bit(int layer, int bit) const {
+            const std::uint64_t before = (*occupancy)[static_cast<std::size_t>(layer)] & ((std::uint64_t{1} << bit) - 1);
+            return voxels[row_start[static_cast<std::size_t>(layer << 3)] + std::popcount(before)];
         }
     };
 

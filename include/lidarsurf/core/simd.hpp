@@ -3,7 +3,8 @@
 // and their per-level scans (NeighbourhoodWindow) compare 16 list entries per instruction with
 // SSE2, x86-64's baseline; on a CPU with AVX2 the same loops compare 32, chosen at run time, so
 // one portable binary runs the wider code where it can. The scans compare bytes and select
-// records; the additions of the records are the same operations in the same order whatever the
+// records (the slab walk also ranks a voxel's record with POPCNT where it can, instead of a byte
+// table); the additions of the records are the same operations in the same order whatever the
 // level, so every level gives the same bits (tests/core/test_simd.cpp,
 // tests/surface/test_neighbourhood_window.cpp).
 namespace lidarsurf {
@@ -11,7 +12,7 @@ namespace lidarsurf {
 enum class SimdLevel {
     Portable,  ///< the scalar code (non-x86 CPUs, and builds with LIDARSURF_SCALAR)
     Sse2,      ///< 16 bytes per compare
-    Avx2,      ///< 32 bytes per compare
+    Avx2,      ///< 32 bytes per compare; with the BMI1, BMI2 and POPCNT instructions every AVX2 CPU has
 };
 
 /// The widest level this build can run on this CPU.

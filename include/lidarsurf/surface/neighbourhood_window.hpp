@@ -116,6 +116,11 @@ private:
     // column instead of per block and layer (slabs reach 3 to 4 blocks along their radial axis,
     // and that bookkeeping was most of the walk's cost on lidar frames).
     void add_slab(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const;
+    // add_slab's walk, ranking the records with the byte table (Block::at) or, compiled for the
+    // Avx2 level (add_slab_v3), with a population count (Block::at_layer_bit): the same records.
+    template <bool Popcount>
+    void add_slab_walk(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const;
+    void add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const;
     // Calls f(block, b, layers, full) for each window block b = (bx, by, bz) whose layers within
     // the box [l, h] (window coordinates) hold voxels, in the order z, y, x: `layers` has bit z
     // set for those layers, `full` is the box's 8x8 layer mask in the block (bit x + 8 y).
