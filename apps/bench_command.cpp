@@ -352,7 +352,7 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     b->add_flag("--no-imls", o.no_imls, "Skip IMLS");
     b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables and the incremental re-meshing table");
     b->add_option("--json", o.json, "Also write every row (all run times) as JSON");
-    b->add_option("--simd", o.simd, "Vector instructions of the fast path's list scans: sse2 | avx2 (default: the widest this CPU has; "
+    b->add_option("--simd", o.simd, "Vector instructions of the fast path's list scans: sse2 | avx2 | avx512 (default: the widest this CPU has; "
                                     "to compare them within one run)");
     add_reconstruct_options(b, o.reconstruct);
     b->footer("Example:\n  lidarsurf bench                      # simulated town frames\n"

@@ -17,7 +17,9 @@ SimdLevel detect() {
     // The compiler's CPU check also asks the OS whether it saves the AVX registers.
     const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
                     __builtin_cpu_supports("popcnt");
-    return v3 ? SimdLevel::Avx2 : SimdLevel::Sse2;
+    if (!v3) return SimdLevel::Sse2;
+    const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl");
+    return avx512 ? SimdLevel::Avx512 : SimdLevel::Avx2;
 #else
     return SimdLevel::Sse2;
 #endif
@@ -57,14 +59,15 @@ const char* to_string(SimdLevel level) {
         case SimdLevel::Portable: return "portable";
         case SimdLevel::Sse2: return "sse2";
         case SimdLevel::Avx2: return "avx2";
+        case SimdLevel::Avx512: return "avx512";
     }
     return "?";
 }
 
 SimdLevel simd_level_from_string(const char* name) {
-    for (SimdLevel level : {SimdLevel::Portable, SimdLevel::Sse2, SimdLevel::Avx2})
+    for (SimdLevel level : {SimdLevel::Portable, SimdLevel::Sse2, SimdLevel::Avx2, SimdLevel::Avx512})
         if (std::strcmp(name, to_string(level)) == 0) return level;
-    throw InvalidArgument(std::string("unknown SIMD level '") + name + "' (portable, sse2, avx2)");
+    throw InvalidArgument(std::string("unknown SIMD level '") + name + "' (portable, sse2, avx2, avx512)");
 }
 
 }  // namespace lidarsurf

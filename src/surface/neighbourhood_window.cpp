@@ -211,6 +211,49 @@ void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, in
     if (c < l.count) add16(levels, l.records, c, lo, k, sums);
     sums.store(acc);
 }
+
+// 64 entries per compare with AVX-512BW: compares give bit masks directly, and the last, partial
+// step loads and stores under a mask (a list holds a multiple of 16 entries). AVX-512F brings
+// fused multiply-adds, which the compiler would use for RawSums' products and sums: this file is
+// compiled with -ffp-contract=off (CMakeLists.txt), so the additions keep their bits.
+#define LIDARSURF_AVX512 "avx512f,avx512bw,avx512vl,avx2,bmi,bmi2,popcnt"
+[[gnu::target(LIDARSURF_AVX512)]] inline __mmask64 lanes_below(std::size_t n) { return n >= 64 ? ~__mmask64{0} : (__mmask64{1} << n) - 1; }
+[[gnu::target(LIDARSURF_AVX512)]] inline __m512i axis_level64(const std::uint8_t* i, __m512i v, __mmask64 m) {
+    const __m512i c = _mm512_maskz_loadu_epi8(m, i);
+    return _mm512_sub_epi8(_mm512_max_epu8(v, _mm512_add_epi8(c, _mm512_set1_epi8(1))), _mm512_min_epu8(v, c));
+}
+[[gnu::target(LIDARSURF_AVX512)]] LevelCounts levels_avx512(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
+    const __m512i vx = _mm512_set1_epi8(static_cast<char>(r.x())), vy = _mm512_set1_epi8(static_cast<char>(r.y())),
+                  vz = _mm512_set1_epi8(static_cast<char>(r.z())), one = _mm512_set1_epi8(1), two = _mm512_set1_epi8(2);
+    __m512i in1 = _mm512_setzero_si512(), in2 = _mm512_setzero_si512();
+    for (std::size_t c = 0; c < l.count; c += 64) {
+        const __mmask64 m = lanes_below(l.count - c);
+        const __m512i level = _mm512_max_epu8(axis_level64(l.x + c, vx, m), _mm512_max_epu8(axis_level64(l.y + c, vy, m), axis_level64(l.z + c, vz, m)));
+        _mm512_mask_storeu_epi8(out + c, m, level);
+        const __m512i weight = _mm512_maskz_loadu_epi8(m, l.weight + c);  // 0 beyond the list: adds nothing
+        in1 = _mm512_mask_adds_epu8(in1, _mm512_cmpeq_epi8_mask(level, one), in1, weight);
+        in2 = _mm512_mask_adds_epu8(in2, _mm512_cmple_epu8_mask(level, two), in2, weight);
+    }
+    // The lanes' sums through memory (GCC 12's _mm512_reduce_add_epi64 warns inside its header).
+    alignas(64) std::uint64_t sums1[8], sums2[8];
+    _mm512_store_si512(sums1, _mm512_sad_epu8(in1, _mm512_setzero_si512()));
+    _mm512_store_si512(sums2, _mm512_sad_epu8(in2, _mm512_setzero_si512()));
+    LevelCounts n;
+    for (int i = 0; i < 8; ++i) n.in1 += static_cast<int>(sums1[i]), n.in2 += static_cast<int>(sums2[i]);
+    return n;
+}
+[[gnu::target(LIDARSURF_AVX512)]] void add_listed_avx512(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
+    RawSums sums(acc, p);
+    const __m512i lo64 = _mm512_set1_epi8(static_cast<char>(lo)), k64 = _mm512_set1_epi8(static_cast<char>(k));
+    for (std::size_t c = 0; c < l.count; c += 64) {
+        const __mmask64 m = lanes_below(l.count - c);
+        const __m512i level = _mm512_maskz_loadu_epi8(m, levels + c);  // 0 beyond the list: below lo >= 1
+        for (std::uint64_t bits = _mm512_mask_cmpge_epu8_mask(_mm512_cmple_epu8_mask(level, k64), level, lo64); bits; bits &= bits - 1)
+            sums.add(*l.records[c + static_cast<std::size_t>(std::countr_zero(bits))]);
+    }
+    sums.store(acc);
+}
+#undef LIDARSURF_AVX512
 #else
 LevelCounts levels_portable(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
     LevelCounts n;
@@ -316,7 +359,7 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
 
 void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const {
 #if defined(LIDARSURF_SSE2)
-    if (simd_ == SimdLevel::Avx2) return add_slab_v3(lo, hi, ring, p, acc);
+    if (simd_ >= SimdLevel::Avx2) return add_slab_v3(lo, hi, ring, p, acc);
 #endif
     add_slab_walk<false>(lo, hi, ring, p, acc);
 }
@@ -446,7 +489,9 @@ const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
     if (levels_.size() < arrays.count) levels_.resize(arrays.count);
     // With the levels, the points of H^1(v) and H^2(v) (first_counted_level).
 #if defined(LIDARSURF_SSE2)
-    const LevelCounts n = simd_ == SimdLevel::Avx2 ? levels_avx2(arrays, r, levels_.data()) : levels_sse2(arrays, r, levels_.data());
+    const LevelCounts n = simd_ == SimdLevel::Avx512 ? levels_avx512(arrays, r, levels_.data())
+                          : simd_ == SimdLevel::Avx2 ? levels_avx2(arrays, r, levels_.data())
+                                                     : levels_sse2(arrays, r, levels_.data());
 #else
     const LevelCounts n = levels_portable(arrays, r, levels_.data());
 #endif
@@ -471,7 +516,9 @@ void NeighbourhoodWindow::add_listed(const VoxelKey& v, int k, bool whole, Momen
     const Eigen::Vector3d p = v.cast<double>() * alpha_;
     const int lo = whole ? 1 : k;
 #if defined(LIDARSURF_SSE2)
-    if (simd_ == SimdLevel::Avx2)
+    if (simd_ == SimdLevel::Avx512)
+        add_listed_avx512(arrays, levels, lo, k, p, acc);
+    else if (simd_ == SimdLevel::Avx2)
         add_listed_avx2(arrays, levels, lo, k, p, acc);
     else
         add_listed_sse2(arrays, levels, lo, k, p, acc);

@@ -1,7 +1,7 @@
 #pragma once
 // Which vector instructions the fast path's byte scans use (issue 5). The voxel lists' level pass
 // and their per-level scans (NeighbourhoodWindow) compare 16 list entries per instruction with
-// SSE2, x86-64's baseline; on a CPU with AVX2 the same loops compare 32, chosen at run time, so
+// SSE2, x86-64's baseline; on a CPU with AVX2 the same loops compare 32 (64 with AVX-512BW), chosen at run time, so
 // one portable binary runs the wider code where it can. The scans compare bytes and select
 // records (the slab walk also ranks a voxel's record with POPCNT where it can, instead of a byte
 // table); the additions of the records are the same operations in the same order whatever the
@@ -13,6 +13,7 @@ enum class SimdLevel {
     Portable,  ///< the scalar code (non-x86 CPUs, and builds with LIDARSURF_SCALAR)
     Sse2,      ///< 16 bytes per compare
     Avx2,      ///< 32 bytes per compare; with the BMI1, BMI2 and POPCNT instructions every AVX2 CPU has
+    Avx512,    ///< 64 bytes per compare (AVX-512 F, BW and VL, with the Avx2 level's instructions)
 };
 
 /// The widest level this build can run on this CPU.
@@ -27,7 +28,7 @@ SimdLevel simd_level();
 void set_simd_level(SimdLevel level);
 
 const char* to_string(SimdLevel level);
-/// "portable", "sse2" or "avx2"; throws InvalidArgument for anything else.
+/// "portable", "sse2", "avx2" or "avx512"; throws InvalidArgument for anything else.
 SimdLevel simd_level_from_string(const char* name);
 
 }  // namespace lidarsurf
