@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -11,6 +12,9 @@
 #include <optional>
 #include <thread>
 
+#if defined(__SSE2__) && !defined(LIDARSURF_SCALAR)
+#include <emmintrin.h>
+#endif
 #include <tbb/concurrent_vector.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -431,6 +435,21 @@ DirtyRegion dirty_region(const VoxelGrid& grid, int reach) {
     return d;
 }
 
+// Bit i set when slots[i] >= 0 (a defined vertex), for 64 slots: the slots' sign bits, 4 per
+// SSE2 instruction (x86-64's baseline), else one by one.
+std::uint64_t defined_bits(const std::int32_t* slots) {
+#if defined(__SSE2__) && !defined(LIDARSURF_SCALAR)
+    std::uint64_t negative = 0;
+    for (int i = 0; i < 64; i += 4)
+        negative |= static_cast<std::uint64_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(slots + i))))) << i;
+    return ~negative;
+#else
+    std::uint64_t bits = 0;
+    for (int i = 0; i < 64; ++i) bits |= static_cast<std::uint64_t>(slots[i] >= 0) << i;
+    return bits;
+#endif
+}
+
 }  // namespace
 
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
@@ -535,12 +554,22 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
     // offset), which does not depend on the thread count.
+    // The first pass counts each block's defined slots and keeps them as a bit mask (one word per
+    // 64 slots, branch-free), so that the second visits only those (a twelfth of the slots on a
+    // KITTI frame) instead of testing every slot again.
     const std::size_t nblocks = slots.block_count();
+    constexpr std::size_t kWords = Slots::kVolume / 64;
     std::vector<std::size_t> block_start(nblocks + 1, 0);
+    std::vector<std::array<std::uint64_t, kWords>> defined_mask(nblocks);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            const Slots::Block& block = slots.block_at(b);
             std::size_t count = 0;
-            for (std::int32_t slot : slots.block_at(b)) count += slot >= 0;
+            for (std::size_t w = 0; w < kWords; ++w) {
+                const std::uint64_t bits = defined_bits(block.data() + 64 * w);
+                defined_mask[b][w] = bits;
+                count += static_cast<std::size_t>(std::popcount(bits));
+            }
             block_start[b + 1] = count;
         }
     });
@@ -550,14 +579,15 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     std::vector<VertexSample> field_samples(defined);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            Slots::Block& block = slots.block_at(b);
             std::size_t at = block_start[b];
-            for (std::int32_t& slot : slots.block_at(b))
-                if (slot >= 0) {
+            for (std::size_t w = 0; w < kWords; ++w)
+                for (std::uint64_t bits = defined_mask[b][w]; bits; bits &= bits - 1, ++at) {
+                    std::int32_t& slot = block[64 * w + static_cast<std::size_t>(std::countr_zero(bits))];
                     const Evaluated& e = defined_vertices[static_cast<std::size_t>(slot)];
                     slot = static_cast<std::int32_t>(at);
                     field_keys[at] = e.key;
                     field_samples[at] = e.sample;
-                    ++at;
                 }
         }
     });
