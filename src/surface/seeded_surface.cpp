@@ -196,6 +196,10 @@ public:
             const auto t1 = Clock::now();
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
                 auto&& view = make_view();
+                // About one active cube and one new cube per cube examined: one allocation each
+                // rather than growing one element at a time.
+                actives[c].reserve(chunk);
+                nexts[c].reserve(chunk);
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
                     examine(view, wave_[i], seeding, actives[c], nexts[c]);
             });
@@ -516,10 +520,14 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         t0 = Clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
             CornerEvaluator& corners = evaluator();
-            for (std::size_t i = r.begin(); i != r.end(); ++i)
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const auto n = static_cast<std::size_t>(popcount(seeds[i].mask));  // as in the later waves
+                active[i].reserve(n);
+                next_cubes[i].reserve(n);
                 for_each_bit(seeds[i].mask, [&](int offset) {
                     search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i]);
                 });
+            }
         });
         timing.seed_wave = seconds_since(t0);
         t0 = Clock::now();
