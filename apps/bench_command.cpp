@@ -352,8 +352,6 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     b->add_flag("--no-imls", o.no_imls, "Skip IMLS");
     b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables and the incremental re-meshing table");
     b->add_option("--json", o.json, "Also write every row (all run times) as JSON");
-    b->add_option("--simd", o.simd, "Vector instructions of the fast path's list scans: sse2 | avx2 | avx512 (default: the widest this CPU has; "
-                                    "to compare them within one run)");
     add_reconstruct_options(b, o.reconstruct);
     b->footer("Example:\n  lidarsurf bench                      # simulated town frames\n"
               "  lidarsurf bench ../shared/data/kitti/*.bin --repeat 11");
@@ -366,7 +364,6 @@ int run_bench(const BenchOptions& o) {
     if (o.frames < 1 || o.frames > 100) throw InvalidArgument("--frames must be in [1, 100]");
     const Method method = resolve_method(o.reconstruct);
     const int threads = method.config.threads;  // 0 = all cores
-    if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
 
     std::vector<std::pair<fs::path, std::string>> scans, sizes;
     fs::path tmp;

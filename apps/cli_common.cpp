@@ -1,5 +1,6 @@
 // Helpers shared by the lidarsurf subcommands.
 #include "cli_common.hpp"
+#include "lidarsurf/core/simd.hpp"
 
 #include <cctype>
 #include <fstream>
@@ -84,6 +85,8 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
     for (auto* opt : guards) opt->excludes(literal);
     app->add_option("--max-memory", c.max_memory_mb, "Memory budget in MiB: refuse (exit 5, with the estimate) a cloud needing more")->capture_default_str();
     app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    app->add_option("--simd", o.simd, "Vector instructions of the fast path: sse2 | avx2 | avx512 (default: the widest this CPU has; "
+                                      "every level gives the same mesh, bit for bit)");
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
     app->add_option("--bin-fields", o.bin_fields, "float32 values per point in .bin input (KITTI 4, nuScenes 5)")->capture_default_str();
     auto given = [](bool& flag) { return [&flag](const std::string&) { flag = true; }; };
@@ -115,6 +118,7 @@ Method resolve_method(const ReconstructOptions& o) {
     m.sensor = parse_vec3(o.origin, "--origin");
     m.read.format = parse_point_format(o.format);
     m.read.bin_fields = o.bin_fields;
+    if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
     return m;
 }
 

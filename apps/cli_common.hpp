@@ -29,6 +29,7 @@ std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig
 /// Options shared by `reconstruct`, `evaluate --holdout`, `bench` and `fuse`.
 struct ReconstructOptions {
     std::string format = "auto", origin = "0,0,0", mode = "an+gc", method = "paper";
+    std::string simd;  // empty: the widest this CPU has (core/simd.hpp)
     int bin_fields = 4;
     ReconstructionConfig config;  // paper defaults, defined once in ReconstructionConfig
     ImlsConfig imls;              // only the fields given on the command line are used

@@ -41,7 +41,6 @@ int run_benchmark(const BenchmarkOptions& o);
 struct BenchOptions {
     std::vector<std::string> scans;
     std::string json;
-    std::string simd;  // empty: the widest the CPU has (core/simd.hpp)
     int repeat = 7, slow_repeat = 3, frames = 3;
     bool no_reference = false, no_imls = false, no_scaling = false;
     ReconstructOptions reconstruct;  // the configuration timed (paper defaults)

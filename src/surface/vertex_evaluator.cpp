@@ -127,8 +127,10 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
                         degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
 }
 
-VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
-                             const Eigen::Vector3d& sensor, EigenSolver solver) {
+namespace {
+
+VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+                               const Eigen::Vector3d& sensor, EigenSolver solver) {
     const Eigen::Vector3d sensor_local = vertex_viewpoint(window.grid(), v, config, sensor);
     const Eigen::Vector3d position = v.cast<double>() * window.voxel_size();
     auto stats = [&](const Moments& m) {
@@ -158,6 +160,29 @@ VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& 
         return stats(slab);
     };
     return choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver, counted);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+#define LIDARSURF_EVALUATE_V3 1
+// The same evaluation compiled for the Avx2 level (core/simd.hpp), everything it calls inlined
+// (flatten): the scalar double arithmetic of the fits in VEX encoding (three operands, so most of
+// its register copies go) and the window's AVX2 walk inline. AVX2 brings no FMA: the same
+// operations, so the same bits as the baseline build (tests/surface/test_vertex_evaluator.cpp).
+[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] VertexSample evaluate_windowed_v3(const NeighbourhoodWindow& window, const VoxelKey& v,
+                                                                                     const ReconstructionConfig& config,
+                                                                                     const Eigen::Vector3d& sensor, EigenSolver solver) {
+    return evaluate_windowed(window, v, config, sensor, solver);
+}
+#endif
+
+}  // namespace
+
+VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor, EigenSolver solver) {
+#if defined(LIDARSURF_EVALUATE_V3)
+    if (window.simd() >= SimdLevel::Avx2) return evaluate_windowed_v3(window, v, config, sensor, solver);
+#endif
+    return evaluate_windowed(window, v, config, sensor, solver);
 }
 
 }  // namespace lidarsurf

@@ -9,6 +9,19 @@ source "$(dirname "$0")/expect.sh"
 "$cli" simulate --scene demo -o "$dir/scan.bin" --gt "$dir/gt.bin" >/dev/null || { echo "simulate failed"; exit 1; }
 expect 0 "triangles" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.ply"
 [ -s "$dir/mesh.ply" ] || { echo "FAIL: no mesh written"; fail=$((fail + 1)); }
+# Every SIMD level this build and CPU have gives the very same mesh file (core/simd.hpp: the AVX2 and
+# AVX-512 code does the baseline's operations, without FMA); the levels it lacks are refused.
+simd_levels=0
+for level in portable sse2 avx2 avx512; do
+    if "$cli" reconstruct "$dir/scan.bin" -o "$dir/simd.ply" --simd "$level" >/dev/null 2>"$dir/simd.err"; then
+        cmp -s "$dir/mesh.ply" "$dir/simd.ply" || { echo "FAIL: --simd $level changed the mesh"; fail=$((fail + 1)); }
+        simd_levels=$((simd_levels + 1))
+    elif ! grep -q "not available here" "$dir/simd.err"; then
+        echo "FAIL: --simd $level: $(cat "$dir/simd.err")"; fail=$((fail + 1))
+    fi
+done
+[ "$simd_levels" -ge 1 ] || { echo "FAIL: no SIMD level ran"; fail=$((fail + 1)); }
+expect 2 "unknown SIMD level" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/x.ply" --simd avx1024
 expect 0 "mode cn" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.obj" --mode cn --k 3
 head -c 1 "$dir/mesh.obj" | grep -q '#' || { echo "FAIL: obj not written"; fail=$((fail + 1)); }
 expect 0 "Examples" -- "$cli" reconstruct --help

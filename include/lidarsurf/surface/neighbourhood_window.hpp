@@ -103,6 +103,8 @@ public:
     void grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e = {}) const;
 
     double voxel_size() const { return alpha_; }
+    /// The SimdLevel of the window's kernels (simd_level() at construction or the last reset()).
+    SimdLevel simd() const { return simd_; }
     const VoxelGrid& grid() const { return voxels_->grid(); }
 
 private:
