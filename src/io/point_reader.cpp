@@ -27,6 +27,17 @@ std::string read_file(const std::string& path) {
     if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path + ": cannot open for reading");
+    // A file with a size is read at once into a string of that size (through a string stream,
+    // the buffer grew and was copied several times: most of a KITTI frame's read time); one
+    // that cannot seek (a pipe: nothing is consumed by the failed seek) through the stream.
+    const std::streamoff size = in.seekg(0, std::ios::end) ? static_cast<std::streamoff>(in.tellg()) : -1;
+    if (size >= 0 && in.seekg(0)) {
+        std::string data(static_cast<std::size_t>(size), '\0');
+        if (!in.read(data.data(), size) || in.peek() != std::char_traits<char>::eof())
+            throw IoError(path + ": read error (the file changed while it was read?)");
+        return data;
+    }
+    in.clear();
     std::ostringstream ss;
     ss << in.rdbuf();
     if (in.bad()) throw IoError(path + ": read error");

@@ -22,6 +22,9 @@ for level in portable sse2 avx2 avx512; do
 done
 [ "$simd_levels" -ge 1 ] || { echo "FAIL: no SIMD level ran"; fail=$((fail + 1)); }
 expect 2 "unknown SIMD level" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/x.ply" --simd avx1024
+# A scan from a pipe (no size to read it by): the same mesh.
+bash -c "cat '$dir/scan.bin' | '$cli' reconstruct /dev/stdin --format bin -o '$dir/pipe.ply'" >/dev/null 2>&1
+check "a scan read from a pipe gives the same mesh" -- cmp -s "$dir/mesh.ply" "$dir/pipe.ply"
 expect 0 "mode cn" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/mesh.obj" --mode cn --k 3
 head -c 1 "$dir/mesh.obj" | grep -q '#' || { echo "FAIL: obj not written"; fail=$((fail + 1)); }
 expect 0 "Examples" -- "$cli" reconstruct --help
