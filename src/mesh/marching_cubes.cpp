@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/simd.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -247,6 +248,25 @@ private:
     std::vector<VertexId> vertex_ids_;
 };
 
+// Meshes cubes [first, last) with `builder`. The run is also compiled for the Avx2 level
+// (core/simd.hpp) with process_cube inlined (flatten): its double arithmetic in VEX encoding, no
+// FMA, so the same mesh; chosen at run time.
+void mesh_cubes_baseline(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
+    for (; first != last; ++first) builder.process_cube(*first);
+}
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+#define LIDARSURF_MESH_V3 1
+[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] void mesh_cubes_v3(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
+    for (; first != last; ++first) builder.process_cube(*first);
+}
+#endif
+void mesh_cubes(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
+#if defined(LIDARSURF_MESH_V3)
+    if (simd_level() >= SimdLevel::Avx2) return mesh_cubes_v3(builder, first, last);
+#endif
+    mesh_cubes_baseline(builder, first, last);
+}
+
 }  // namespace
 
 Mesh extract_mesh(const TsdfField& field, VertexPlacement placement) {
@@ -282,13 +302,13 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
     std::array<WeldTable, 2> weld{empty_weld_table(field), runs > 1 ? empty_weld_table(field) : WeldTable{}};
     if (runs == 1) {
         MeshBuilder builder(field, placement, weld[0]);
-        for (const VoxelKey& v : cubes) builder.process_cube(v);
+        mesh_cubes(builder, cubes.data(), cubes.data() + cubes.size());
         return builder.take();
     }
     std::vector<std::unique_ptr<MeshBuilder>> builders(runs);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
         builders[r] = std::make_unique<MeshBuilder>(field, placement, weld[r % 2]);
-        for (std::size_t i = starts[r]; i < starts[r + 1]; ++i) builders[r]->process_cube(cubes[i]);
+        mesh_cubes(*builders[r], cubes.data() + starts[r], cubes.data() + starts[r + 1]);
     });
     // Global index of each run's vertices, and where each run's new vertices and triangles go.
     std::vector<std::vector<std::uint32_t>> global(runs);
