@@ -171,9 +171,7 @@ struct ListArrays {
     const PackedVoxels::Voxel* const* records;
     std::size_t count;  // a multiple of kLanes
 };
-ListArrays arrays_of(const NeighbourhoodWindow::VoxelList& l) {
-    return {l.x.data(), l.y.data(), l.z.data(), l.weight.data(), l.records.data(), l.x.size()};
-}
+ListArrays arrays_of(const NeighbourhoodWindow::VoxelList& l) { return {l.x, l.y, l.z, l.weight, l.records, l.size}; }
 // The points (weights saturated at 255) of the entries with level 1 and with level <= 2.
 struct LevelCounts {
     int in1 = 0, in2 = 0;
@@ -456,6 +454,21 @@ template <bool Popcount>
     sums.store(acc);
 }
 
+NeighbourhoodWindow::VoxelList NeighbourhoodWindow::VoxelList::padding(std::size_t size, std::uint8_t pad) {
+    VoxelList l;
+    l.size = size;
+    l.storage_ = std::make_unique_for_overwrite<std::byte[]>(size * (sizeof(const PackedVoxels::Voxel*) + 4));
+    l.records = reinterpret_cast<const PackedVoxels::Voxel**>(l.storage_.get());  // at the allocation's start: aligned
+    std::fill_n(l.records, size, nullptr);
+    l.x = reinterpret_cast<std::uint8_t*>(l.records + size);
+    l.y = l.x + size;
+    l.z = l.y + size;
+    l.weight = l.z + size;
+    std::fill_n(l.x, 3 * size, pad);
+    std::fill_n(l.weight, size, std::uint8_t{0});
+    return l;
+}
+
 NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     constexpr int B = Map::kSize, m = B - 1;
     // The region [8b - K, 8b + 6 + K]^3, in window coordinates.
@@ -473,13 +486,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
             }
         }
     });
-    VoxelList list;
-    const std::size_t padded = (count + kLanes - 1) / kLanes * kLanes;
-    list.x.assign(padded, kPad);
-    list.y.assign(padded, kPad);
-    list.z.assign(padded, kPad);
-    list.weight.assign(padded, 0);
-    list.records.assign(padded, nullptr);
+    VoxelList list = VoxelList::padding((count + kLanes - 1) / kLanes * kLanes, kPad);
     std::size_t at = 0;
     for (const LayerBits& layer : layers) {
         const auto z = static_cast<std::uint8_t>(layer.z - l.z());
