@@ -11,6 +11,7 @@
 
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/eval/report.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
@@ -373,6 +374,23 @@ PYBIND11_MODULE(_lidarsurf, m) {
         py::arg("mesh"), py::arg("gt_points"), py::arg("origin"), py::arg("max_range"), py::arg("threshold"), py::arg("delta"),
         py::arg("seed"), "Metrics of `mesh` against `gt_points` as JSON text (use lidarsurf.evaluate).");
 
+    m.def(
+        "simd_level", [] { return std::string(to_string(simd_level())); },
+        "The vector instructions the fast path uses: 'sse2', 'avx2' or 'avx512' (the widest this CPU has, unless\n"
+        "set_simd_level lowered it), or 'portable' in a build without SIMD. Every level gives the same mesh, bit for bit.");
+    m.def(
+        "simd_levels",
+        [] {
+            std::vector<std::string> out;
+            for (int l = static_cast<int>(minimum_simd_level()); l <= static_cast<int>(supported_simd_level()); ++l)
+                out.emplace_back(to_string(static_cast<SimdLevel>(l)));
+            return out;
+        },
+        "The levels this build and CPU can run, narrowest first (set_simd_level takes any of them).");
+    m.def(
+        "set_simd_level", [](const std::string& level) { set_simd_level(simd_level_from_string(level.c_str())); }, py::arg("level"),
+        "Use the vector instructions `level` ('sse2', 'avx2', 'avx512') from now on, in every thread: to compare speeds, or to\n"
+        "check that a level gives the same mesh. ValueError for a level this build or CPU lacks. Not while a reconstruction runs.");
     m.def(
         "simulate",
         [](const std::string& scene, std::uint64_t seed, bool ground_truth) {

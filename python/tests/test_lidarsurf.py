@@ -243,3 +243,21 @@ def test_read_poses_and_the_calibration(tmp_path):
     (tmp_path / "bad.txt").write_text("P0: 1 0 0 0 0 1 0 0 0 0 1 0\n")
     with pytest.raises(ValueError, match="Tr:"):
         lidarsurf.read_poses(str(tmp_path / "poses.txt"), calib=str(tmp_path / "bad.txt"))
+
+
+def test_every_simd_level_gives_the_same_mesh(scan):
+    levels = lidarsurf.simd_levels()
+    assert levels and lidarsurf.simd_level() == levels[-1]  # the widest by default
+    meshes = []
+    try:
+        for level in levels:
+            lidarsurf.set_simd_level(level)
+            assert lidarsurf.simd_level() == level
+            meshes.append(lidarsurf.reconstruct(scan))
+    finally:
+        lidarsurf.set_simd_level(levels[-1])
+    for m in meshes[1:]:
+        assert np.array_equal(m.vertices, meshes[0].vertices) and np.array_equal(m.triangles, meshes[0].triangles)
+        assert np.array_equal(m.normals, meshes[0].normals) and np.array_equal(m.confidence, meshes[0].confidence)
+    with pytest.raises(ValueError, match="unknown SIMD level"):
+        lidarsurf.set_simd_level("avx1024")
