@@ -9,6 +9,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/radix_sort.hpp"
+#include "lidarsurf/core/simd.hpp"
 
 namespace lidarsurf {
 
@@ -95,12 +96,14 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     constexpr std::uint32_t kSkip = 0xffffffffu;
     std::vector<VoxelKey> keys(n);
     std::vector<std::uint8_t> finite(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    auto key_range = [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i != end; ++i) {
             finite[i] = points[i].allFinite();
             if (finite[i]) keys[i] = key_of_local(points[i] - origin_);
         }
-    });
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                      [&](const auto& r) { call_at_simd_level(key_range, r.begin(), r.end()); });
     // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).
     std::vector<std::uint32_t> voxel(n, kSkip);
@@ -145,12 +148,14 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
             if (j == 0 || voxel[order[j]] != voxel[order[j - 1]]) runs.push_back(j);
     }
     runs.push_back(m);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 512), [&](const auto& r) {
-        for (std::size_t run = r.begin(); run != r.end(); ++run) {
+    auto add_runs = [&](std::size_t from, std::size_t to) {
+        for (std::size_t run = from; run != to; ++run) {
             VoxelStats& stats = stats_[voxel[order[runs[run]]]];
             for (std::size_t j = runs[run]; j < runs[run + 1]; ++j) stats.add(points[order[j]] - origin_);
         }
-    });
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 512),
+                      [&](const auto& r) { call_at_simd_level(add_runs, r.begin(), r.end()); });
     if (viewpoints_enabled_) {
         viewpoint_sums_.resize(stats_.size(), Eigen::Vector3d::Zero());
         const Eigen::Vector3d local = *viewpoint - origin_;

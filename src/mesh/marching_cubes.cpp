@@ -248,23 +248,13 @@ private:
     std::vector<VertexId> vertex_ids_;
 };
 
-// Meshes cubes [first, last) with `builder`. The run is also compiled for the Avx2 level
-// (core/simd.hpp) with process_cube inlined (flatten): its double arithmetic in VEX encoding, no
-// FMA, so the same mesh; chosen at run time.
-void mesh_cubes_baseline(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
-    for (; first != last; ++first) builder.process_cube(*first);
-}
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
-#define LIDARSURF_MESH_V3 1
-[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] void mesh_cubes_v3(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
-    for (; first != last; ++first) builder.process_cube(*first);
-}
-#endif
+// Meshes cubes [first, last) with `builder`, compiled for the Avx2 level where the CPU has it
+// (core/simd.hpp: process_cube inlined, its double arithmetic in VEX encoding, no FMA, so the same
+// mesh).
 void mesh_cubes(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
-#if defined(LIDARSURF_MESH_V3)
-    if (simd_level() >= SimdLevel::Avx2) return mesh_cubes_v3(builder, first, last);
-#endif
-    mesh_cubes_baseline(builder, first, last);
+    call_at_simd_level([&] {
+        for (const VoxelKey* cube = first; cube != last; ++cube) builder.process_cube(*cube);
+    });
 }
 
 }  // namespace

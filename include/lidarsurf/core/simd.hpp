@@ -7,6 +7,8 @@
 // table); the additions of the records are the same operations in the same order whatever the
 // level, so every level gives the same bits (tests/core/test_simd.cpp,
 // tests/surface/test_neighbourhood_window.cpp).
+#include <utility>
+
 namespace lidarsurf {
 
 enum class SimdLevel {
@@ -28,6 +30,29 @@ SimdLevel simd_level();
 void set_simd_level(SimdLevel level);
 
 const char* to_string(SimdLevel level);
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+namespace simd_detail {
+// f(args...) with everything it calls inlined (flatten) into a function compiled for AVX2 with
+// BMI1/2 and POPCNT: scalar double code in VEX encoding, SSE4.1's roundsd for floor. No FMA.
+template <typename F, typename... Args>
+[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] inline void call_avx2(F& f, Args&... args) {
+    f(args...);
+}
+}  // namespace simd_detail
+#endif
+
+/// Calls f(args...) as compiled for the Avx2 level when simd_level() is at least that (the same
+/// operations, so the same results), else as it is: for hot loops of scalar arithmetic, which
+/// the portable x86-64 build cannot give AVX2's instructions. One check per call: call it per
+/// chunk of work, not per element.
+template <typename F, typename... Args>
+void call_at_simd_level(F&& f, Args&&... args) {
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+    if (simd_level() >= SimdLevel::Avx2) return simd_detail::call_avx2(f, args...);
+#endif
+    f(args...);
+}
 /// "portable", "sse2", "avx2" or "avx512"; throws InvalidArgument for anything else.
 SimdLevel simd_level_from_string(const char* name);
 
