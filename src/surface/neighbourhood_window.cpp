@@ -254,13 +254,12 @@ void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, in
 // step loads and stores under a mask (a list holds a multiple of 16 entries). AVX-512F brings
 // fused multiply-adds, which the compiler would use for RawSums' products and sums: this file is
 // compiled with -ffp-contract=off (CMakeLists.txt), so the additions keep their bits.
-#define LIDARSURF_AVX512 "avx512f,avx512bw,avx512vl,avx2,bmi,bmi2,popcnt"
-[[gnu::target(LIDARSURF_AVX512)]] inline __mmask64 lanes_below(std::size_t n) { return n >= 64 ? ~__mmask64{0} : (__mmask64{1} << n) - 1; }
-[[gnu::target(LIDARSURF_AVX512)]] inline __m512i axis_level64(const std::uint8_t* i, __m512i v, __mmask64 m) {
+[[gnu::target(LIDARSURF_AVX512_TARGET)]] inline __mmask64 lanes_below(std::size_t n) { return n >= 64 ? ~__mmask64{0} : (__mmask64{1} << n) - 1; }
+[[gnu::target(LIDARSURF_AVX512_TARGET)]] inline __m512i axis_level64(const std::uint8_t* i, __m512i v, __mmask64 m) {
     const __m512i c = _mm512_maskz_loadu_epi8(m, i);
     return _mm512_sub_epi8(_mm512_max_epu8(v, _mm512_add_epi8(c, _mm512_set1_epi8(1))), _mm512_min_epu8(v, c));
 }
-[[gnu::target(LIDARSURF_AVX512)]] LevelCounts levels_avx512(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
+[[gnu::target(LIDARSURF_AVX512_TARGET)]] LevelCounts levels_avx512(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
     const __m512i vx = _mm512_set1_epi8(static_cast<char>(r.x())), vy = _mm512_set1_epi8(static_cast<char>(r.y())),
                   vz = _mm512_set1_epi8(static_cast<char>(r.z())), one = _mm512_set1_epi8(1), two = _mm512_set1_epi8(2);
     __m512i in1 = _mm512_setzero_si512(), in2 = _mm512_setzero_si512();
@@ -280,7 +279,7 @@ void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, in
     for (int i = 0; i < 8; ++i) n.in1 += static_cast<int>(sums1[i]), n.in2 += static_cast<int>(sums2[i]);
     return n;
 }
-[[gnu::target(LIDARSURF_AVX512)]] void add_listed_avx512(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
+[[gnu::target(LIDARSURF_AVX512_TARGET)]] void add_listed_avx512(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
     RawSums4 sums(acc, p);
     const __m512i lo64 = _mm512_set1_epi8(static_cast<char>(lo)), k64 = _mm512_set1_epi8(static_cast<char>(k));
     for (std::size_t c = 0; c < l.count; c += 64) {
@@ -291,7 +290,6 @@ void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, in
     }
     sums.store(acc);
 }
-#undef LIDARSURF_AVX512
 #else
 LevelCounts levels_portable(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
     LevelCounts n;
@@ -404,7 +402,7 @@ void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool 
 
 #if defined(LIDARSURF_SSE2)
 // flatten: the walk and RawSums4's methods (which need AVX2) are inlined here, where it is on.
-[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] void NeighbourhoodWindow::add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring,
+[[gnu::target(LIDARSURF_AVX2_TARGET), gnu::flatten]] void NeighbourhoodWindow::add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring,
                                                                              const Eigen::Vector3d& p, Moments& acc) const {
     add_slab_walk<true>(lo, hi, ring, p, acc);
 }

@@ -168,7 +168,7 @@ VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey
 // (flatten): the scalar double arithmetic of the fits in VEX encoding (three operands, so most of
 // its register copies go) and the window's AVX2 walk inline. AVX2 brings no FMA: the same
 // operations, so the same bits as the baseline build (tests/surface/test_vertex_evaluator.cpp).
-[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] VertexSample evaluate_windowed_v3(const NeighbourhoodWindow& window, const VoxelKey& v,
+[[gnu::target(LIDARSURF_AVX2_TARGET), gnu::flatten]] VertexSample evaluate_windowed_v3(const NeighbourhoodWindow& window, const VoxelKey& v,
                                                                                      const ReconstructionConfig& config,
                                                                                      const Eigen::Vector3d& sensor, EigenSolver solver) {
     return evaluate_windowed(window, v, config, sensor, solver);

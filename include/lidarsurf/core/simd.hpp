@@ -32,11 +32,15 @@ void set_simd_level(SimdLevel level);
 const char* to_string(SimdLevel level);
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+/// The instruction sets of the Avx2 level, for `[[gnu::target(...)]]` (no FMA: see above).
+#define LIDARSURF_AVX2_TARGET "avx2,bmi,bmi2,popcnt"
+/// And of the Avx512 level.
+#define LIDARSURF_AVX512_TARGET "avx512f,avx512bw,avx512vl," LIDARSURF_AVX2_TARGET
 namespace simd_detail {
 // f(args...) with everything it calls inlined (flatten) into a function compiled for AVX2 with
 // BMI1/2 and POPCNT: scalar double code in VEX encoding, SSE4.1's roundsd for floor. No FMA.
 template <typename F, typename... Args>
-[[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] inline void call_avx2(F& f, Args&... args) {
+[[gnu::target(LIDARSURF_AVX2_TARGET), gnu::flatten]] inline void call_avx2(F& f, Args&... args) {
     f(args...);
 }
 }  // namespace simd_detail
