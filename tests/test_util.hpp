@@ -20,12 +20,7 @@
 namespace lidarsurf::test {
 
 /// Every SimdLevel this build can run on this CPU (core/simd.hpp), narrowest first.
-inline std::vector<SimdLevel> simd_levels() {
-    std::vector<SimdLevel> out;
-    for (int l = static_cast<int>(minimum_simd_level()); l <= static_cast<int>(supported_simd_level()); ++l)
-        out.push_back(static_cast<SimdLevel>(l));
-    return out;
-}
+inline std::vector<SimdLevel> simd_levels() { return available_simd_levels(); }
 /// Runs the scope at `level`, then restores the level in force before.
 class ScopedSimdLevel {
 public:

@@ -382,8 +382,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "simd_levels",
         [] {
             std::vector<std::string> out;
-            for (int l = static_cast<int>(minimum_simd_level()); l <= static_cast<int>(supported_simd_level()); ++l)
-                out.emplace_back(to_string(static_cast<SimdLevel>(l)));
+            for (SimdLevel level : available_simd_levels()) out.emplace_back(to_string(level));
             return out;
         },
         "The levels this build and CPU can run, narrowest first (set_simd_level takes any of them).");

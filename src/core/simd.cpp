@@ -45,6 +45,13 @@ SimdLevel minimum_simd_level() {
 #endif
 }
 
+std::vector<SimdLevel> available_simd_levels() {
+    std::vector<SimdLevel> out;
+    for (int l = static_cast<int>(minimum_simd_level()); l <= static_cast<int>(supported_simd_level()); ++l)
+        out.push_back(static_cast<SimdLevel>(l));
+    return out;
+}
+
 SimdLevel simd_level() { return current().load(std::memory_order_relaxed); }
 
 void set_simd_level(SimdLevel level) {

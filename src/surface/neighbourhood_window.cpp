@@ -78,15 +78,14 @@ struct RawSums {
 // (n, s1x, s1y, s1z), (sxx, sxy, sxz, syy), (syz, szz). Each lane does the operation of the
 // SSE2 lane above in the same order (w * w in the first lane is computed and dropped), without
 // FMA, so the same bits in 16 instructions per voxel instead of 38.
-#define LIDARSURF_AVX2_SUMS gnu::target("avx2")
 struct RawSums4 {
     __m256d p4;          // (0, px, py, pz)
     __m256d s1n, s2a;    // (n, s1x, s1y, s1z), (sxx, sxy, sxz, syy)
     __m128d s2b;         // (syz, szz)
-    [[LIDARSURF_AVX2_SUMS]] RawSums4(const Moments& acc, const Eigen::Vector3d& p)
+    [[gnu::target(LIDARSURF_AVX2_TARGET)]] RawSums4(const Moments& acc, const Eigen::Vector3d& p)
         : p4(_mm256_set_pd(p.z(), p.y(), p.x(), 0.0)), s1n(_mm256_set_pd(acc.s1.z(), acc.s1.y(), acc.s1.x(), acc.n)),
           s2a(_mm256_set_pd(acc.s2(1, 1), acc.s2(0, 2), acc.s2(0, 1), acc.s2(0, 0))), s2b(_mm_set_pd(acc.s2(2, 2), acc.s2(1, 2))) {}
-    [[LIDARSURF_AVX2_SUMS]] void add(const PackedVoxels::Voxel& s) {
+    [[gnu::target(LIDARSURF_AVX2_TARGET)]] void add(const PackedVoxels::Voxel& s) {
         const double* r = &s.count;  // count, mx, my, mz, xx, xy, xz, yy, yz, zz
         const __m256d wd = _mm256_sub_pd(_mm256_loadu_pd(r), p4);                  // (w, dx, dy, dz)
         const __m256d wwd = _mm256_mul_pd(_mm256_permute4x64_pd(wd, 0x00), wd);    // (w w, w dx, w dy, w dz)
@@ -98,7 +97,7 @@ struct RawSums4 {
         const __m128d wyz = _mm256_extractf128_pd(wwd, 1);                         // (w dy, w dz)
         s2b = _mm_add_pd(s2b, _mm_add_pd(_mm_loadu_pd(r + 8), _mm_mul_pd(wyz, _mm_unpackhi_pd(dyz, dyz))));
     }
-    [[LIDARSURF_AVX2_SUMS]] void store(Moments& acc) const {  // the scatter is symmetric
+    [[gnu::target(LIDARSURF_AVX2_TARGET)]] void store(Moments& acc) const {  // the scatter is symmetric
         alignas(32) double a[4], b[4], c[2];
         _mm256_store_pd(a, s1n);
         _mm256_store_pd(b, s2a);
@@ -108,7 +107,6 @@ struct RawSums4 {
         acc.s2 << b[0], b[1], b[2], b[1], b[3], c[0], b[2], c[0], c[1];
     }
 };
-#undef LIDARSURF_AVX2_SUMS
 template <bool Wide>
 using SumsFor = std::conditional_t<Wide, RawSums4, RawSums>;
 #else
@@ -214,12 +212,12 @@ void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, in
 // The same 32 entries per compare; a list of an odd number of 16-entry chunks ends with one
 // chunk of the SSE2 code. Integer compares only, and the additions are RawSums' in list order:
 // the same bits as the SSE2 kernels (no FMA is enabled here).
-[[gnu::target("avx2")]] inline __m256i bytes32(int value) { return _mm256_set1_epi8(static_cast<char>(value)); }
-[[gnu::target("avx2")]] inline __m256i axis_level32(const std::uint8_t* i, __m256i v) {
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline __m256i bytes32(int value) { return _mm256_set1_epi8(static_cast<char>(value)); }
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline __m256i axis_level32(const std::uint8_t* i, __m256i v) {
     const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i));
     return _mm256_sub_epi8(_mm256_max_epu8(v, _mm256_add_epi8(c, bytes32(1))), _mm256_min_epu8(v, c));
 }
-[[gnu::target("avx2")]] LevelCounts levels_avx2(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] LevelCounts levels_avx2(const ListArrays& l, const VoxelKey& r, std::uint8_t* out) {
     const __m256i vx = bytes32(r.x()), vy = bytes32(r.y()), vz = bytes32(r.z()), one = bytes32(1), two = bytes32(2);
     __m256i in1 = _mm256_setzero_si256(), in2 = _mm256_setzero_si256();
     std::size_t c = 0;
@@ -235,7 +233,7 @@ void add_listed_sse2(const ListArrays& l, const std::uint8_t* levels, int lo, in
     return {sum_bytes(_mm256_castsi256_si128(in1)) + sum_bytes(_mm256_extracti128_si256(in1, 1)) + sum_bytes(tail1),
             sum_bytes(_mm256_castsi256_si128(in2)) + sum_bytes(_mm256_extracti128_si256(in2, 1)) + sum_bytes(tail2)};
 }
-[[gnu::target("avx2")]] void add_listed_avx2(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] void add_listed_avx2(const ListArrays& l, const std::uint8_t* levels, int lo, int k, const Eigen::Vector3d& p, Moments& acc) {
     RawSums4 sums(acc, p);
     const __m256i lo32 = bytes32(lo), k32 = bytes32(k);
     std::size_t c = 0;
@@ -404,10 +402,6 @@ void NeighbourhoodWindow::add_slab(const VoxelKey& lo, const VoxelKey& hi, bool 
 // flatten: the walk and RawSums4's methods (which need AVX2) are inlined here, where it is on.
 [[gnu::target(LIDARSURF_AVX2_TARGET), gnu::flatten]] void NeighbourhoodWindow::add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring,
                                                                              const Eigen::Vector3d& p, Moments& acc) const {
-    add_slab_walk<true>(lo, hi, ring, p, acc);
-}
-#else
-void NeighbourhoodWindow::add_slab_v3(const VoxelKey& lo, const VoxelKey& hi, bool ring, const Eigen::Vector3d& p, Moments& acc) const {
     add_slab_walk<true>(lo, hi, ring, p, acc);
 }
 #endif

@@ -510,7 +510,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         // the seeds the cubes lead to (three fifths of the cubes they lead to on a KITTI frame),
         // which absorb() would otherwise look up one by one only to find them visited.
         for (std::size_t i = 0; i < seeds.size(); ++i) {
-            BlockMap<std::uint8_t>::Block& seen = search.visited().block_at(search.visited().block_index(seeds[i].block));
+            BlockMap<std::uint8_t>::Block& seen = search.visited().block(seeds[i].block);
             for_each_bit(seeds[i].mask, [&](int offset) { seen[static_cast<std::size_t>(offset)] = 1; });
             for_each_corner_block(seeds[i].block, seeds[i].mask, [&](const VoxelKey& b) { slots.block_index(b); });
         }

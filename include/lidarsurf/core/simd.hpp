@@ -1,13 +1,14 @@
 #pragma once
-// Which vector instructions the fast path's byte scans use (issue 5). The voxel lists' level pass
-// and their per-level scans (NeighbourhoodWindow) compare 16 list entries per instruction with
-// SSE2, x86-64's baseline; on a CPU with AVX2 the same loops compare 32 (64 with AVX-512BW), chosen at run time, so
-// one portable binary runs the wider code where it can. The scans compare bytes and select
-// records (the slab walk also ranks a voxel's record with POPCNT where it can, instead of a byte
-// table); the additions of the records are the same operations in the same order whatever the
-// level, so every level gives the same bits (tests/core/test_simd.cpp,
-// tests/surface/test_neighbourhood_window.cpp).
+// Which vector instructions the fast path uses (issue 5; docs/method.md, "Vector instructions
+// chosen at run time"). The build is portable x86-64 (SSE2); the hot code also exists for AVX2
+// (with BMI1/2 and POPCNT) and AVX-512, chosen at run time: the voxel lists' scans compare 16, 32
+// or 64 entries per instruction, the slab walk ranks records with POPCNT, and the vertex
+// evaluation, marching cubes and the insertion loops run as copies compiled for AVX2. Every level
+// does the same arithmetic in the same order and none fuses multiply-adds, so every level gives
+// the same results (tests/core/test_simd.cpp, tests/surface/test_neighbourhood_window.cpp,
+// tests/cli/test_cli.sh, tests/cli/test_no_fma.sh).
 #include <utility>
+#include <vector>
 
 namespace lidarsurf {
 
@@ -22,6 +23,8 @@ enum class SimdLevel {
 SimdLevel supported_simd_level();
 /// The narrowest level this build has: Portable with LIDARSURF_SCALAR (or off x86), else Sse2.
 SimdLevel minimum_simd_level();
+/// Every level from minimum_simd_level() to supported_simd_level(), narrowest first.
+std::vector<SimdLevel> available_simd_levels();
 /// The level in use: supported_simd_level() unless changed by set_simd_level().
 SimdLevel simd_level();
 /// Uses `level` from now on, in every thread (tests, and `lidarsurf bench --simd` to compare the
@@ -30,12 +33,17 @@ SimdLevel simd_level();
 void set_simd_level(SimdLevel level);
 
 const char* to_string(SimdLevel level);
+/// "portable", "sse2", "avx2" or "avx512"; throws InvalidArgument for anything else.
+SimdLevel simd_level_from_string(const char* name);
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+#if defined(__SSE2__)
 /// The instruction sets of the Avx2 level, for `[[gnu::target(...)]]` (no FMA: see above).
 #define LIDARSURF_AVX2_TARGET "avx2,bmi,bmi2,popcnt"
 /// And of the Avx512 level.
 #define LIDARSURF_AVX512_TARGET "avx512f,avx512bw,avx512vl," LIDARSURF_AVX2_TARGET
+#endif
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
 namespace simd_detail {
 // f(args...) with everything it calls inlined (flatten) into a function compiled for AVX2 with
 // BMI1/2 and POPCNT: scalar double code in VEX encoding, SSE4.1's roundsd for floor. No FMA.
@@ -57,7 +65,5 @@ void call_at_simd_level(F&& f, Args&&... args) {
 #endif
     f(args...);
 }
-/// "portable", "sse2", "avx2" or "avx512"; throws InvalidArgument for anything else.
-SimdLevel simd_level_from_string(const char* name);
 
 }  // namespace lidarsurf
