@@ -438,7 +438,7 @@ int run_bench(const BenchOptions& o) {
                 if (!r.phases[0].empty()) phased.push_back(r);
         if (!phased.empty()) {
             std::printf("\nthe fast path's tsdf by phase (medians, ms): setup = packing and seeds; seed wave and later waves\n"
-                        "= their parallel parts; serial = between the waves; field = ordering the defined vertices:\n");
+                        "= their parallel parts; serial = between the waves; field = ordering the defined vertices and sorting the cubes:\n");
             std::fputs(format_phases(phased).c_str(), stdout);
         }
         if (!size_rows.empty()) {

@@ -18,6 +18,7 @@
 #include <tbb/concurrent_vector.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
 #include "lidarsurf/core/block_map.hpp"
@@ -182,7 +183,10 @@ public:
     /// with its own `make_view()`: `view.corners(cube, s)` sets the samples of the cube's corners
     /// and returns whether they are all defined (false: the cube cannot be active, skip it; `s`
     /// may then be incomplete). `before_wave(cubes)` runs serially before each wave. The cubes a
-    /// wave leads to are visited in chunk order (the serial order). Returns the active cubes.
+    /// wave leads to are visited in chunk order (the serial order). Returns the active cubes, in
+    /// wave order: which cubes are reached does not depend on the order of the waves, and the
+    /// callers sort them (sort_zyx), which makes the mesh's vertex and triangle order
+    /// deterministic; compute_seeded_tsdf sorts while it assembles the field.
     template <typename MakeView, typename BeforeWave>
     std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave) {
         std::vector<VoxelKey> next;
@@ -211,11 +215,6 @@ public:
             seeding = false;
             seconds_serial_ += std::chrono::duration<double>(t1 - t0).count() + seconds_since(t2);
         }
-        // Which cubes are reached does not depend on the order of the waves; the sort makes the
-        // output (and so the mesh's vertex and triangle order) deterministic.
-        const auto t3 = Clock::now();
-        sort_zyx(active_);
-        seconds_serial_ += seconds_since(t3);
         return std::move(active_);
     }
 
@@ -244,7 +243,9 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
         TsdfField::Accessor values;
         bool corners(const VoxelKey& cube, CornerSamples& s) { return values.corners(cube, s); }
     };
-    return search.run(true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {});
+    std::vector<VoxelKey> cubes = search.run(true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {});
+    sort_zyx(cubes);
+    return cubes;
 }
 
 namespace {
@@ -561,44 +562,51 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     t0 = Clock::now();
 
     // The field: the defined evaluated vertices, ordered by slot (block creation order, then
-    // offset), which does not depend on the thread count.
-    // The first pass counts each block's defined slots and keeps them as a bit mask (one word per
-    // 64 slots, branch-free), so that the second visits only those (a twelfth of the slots on a
-    // KITTI frame) instead of testing every slot again.
-    const std::size_t nblocks = slots.block_count();
-    constexpr std::size_t kWords = Slots::kVolume / 64;
-    std::vector<std::size_t> block_start(nblocks + 1, 0);
-    std::vector<std::array<std::uint64_t, kWords>> defined_mask(nblocks);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
-        for (std::size_t b = r.begin(); b != r.end(); ++b) {
-            const Slots::Block& block = slots.block_at(b);
-            std::size_t count = 0;
-            for (std::size_t w = 0; w < kWords; ++w) {
-                const std::uint64_t bits = defined_bits(block.data() + 64 * w);
-                defined_mask[b][w] = bits;
-                count += static_cast<std::size_t>(std::popcount(bits));
-            }
-            block_start[b + 1] = count;
-        }
-    });
-    for (std::size_t b = 0; b < nblocks; ++b) block_start[b + 1] += block_start[b];
-    const std::size_t defined = block_start[nblocks];
-    std::vector<VoxelKey> field_keys(defined);
-    std::vector<VertexSample> field_samples(defined);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
-        for (std::size_t b = r.begin(); b != r.end(); ++b) {
-            Slots::Block& block = slots.block_at(b);
-            std::size_t at = block_start[b];
-            for (std::size_t w = 0; w < kWords; ++w)
-                for (std::uint64_t bits = defined_mask[b][w]; bits; bits &= bits - 1, ++at) {
-                    std::int32_t& slot = block[64 * w + static_cast<std::size_t>(std::countr_zero(bits))];
-                    const Evaluated& e = defined_vertices[static_cast<std::size_t>(slot)];
-                    slot = static_cast<std::int32_t>(at);
-                    field_keys[at] = e.key;
-                    field_samples[at] = e.sample;
+    // offset), which does not depend on the thread count. Assembled while another task sorts the
+    // active cubes: the sort is serial (~1 ms on a KITTI frame), and run after the waves it left
+    // one of the two cores idle.
+    std::vector<VoxelKey> field_keys;
+    std::vector<VertexSample> field_samples;
+    auto assemble = [&] {
+        // The first pass counts each block's defined slots and keeps them as a bit mask (one word per
+        // 64 slots, branch-free), so that the second visits only those (a twelfth of the slots on a
+        // KITTI frame) instead of testing every slot again.
+        const std::size_t nblocks = slots.block_count();
+        constexpr std::size_t kWords = Slots::kVolume / 64;
+        std::vector<std::size_t> block_start(nblocks + 1, 0);
+        std::vector<std::array<std::uint64_t, kWords>> defined_mask(nblocks);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
+            for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                const Slots::Block& block = slots.block_at(b);
+                std::size_t count = 0;
+                for (std::size_t w = 0; w < kWords; ++w) {
+                    const std::uint64_t bits = defined_bits(block.data() + 64 * w);
+                    defined_mask[b][w] = bits;
+                    count += static_cast<std::size_t>(std::popcount(bits));
                 }
-        }
-    });
+                block_start[b + 1] = count;
+            }
+        });
+        for (std::size_t b = 0; b < nblocks; ++b) block_start[b + 1] += block_start[b];
+        const std::size_t defined = block_start[nblocks];
+        field_keys.resize(defined);
+        field_samples.resize(defined);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
+            for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                Slots::Block& block = slots.block_at(b);
+                std::size_t at = block_start[b];
+                for (std::size_t w = 0; w < kWords; ++w)
+                    for (std::uint64_t bits = defined_mask[b][w]; bits; bits &= bits - 1, ++at) {
+                        std::int32_t& slot = block[64 * w + static_cast<std::size_t>(std::countr_zero(bits))];
+                        const Evaluated& e = defined_vertices[static_cast<std::size_t>(slot)];
+                        slot = static_cast<std::int32_t>(at);
+                        field_keys[at] = e.key;
+                        field_samples[at] = e.sample;
+                    }
+            }
+        });
+    };
+    tbb::parallel_invoke([&] { sort_zyx(out.cubes); }, assemble);
     out.field = TsdfField(std::move(slots), std::move(field_keys), std::move(field_samples), grid.voxel_size(), grid.origin());
     timing.field = seconds_since(t0);
     out.timing = timing;

@@ -34,8 +34,8 @@ struct SeededTiming {
     double setup = 0;        ///< packing the voxels, the seed cubes and their slot blocks (mostly serial)
     double seed_wave = 0;    ///< the seeds' wave, in parallel (most of the vertices on a lidar frame)
     double later_waves = 0;  ///< the parallel parts of the later waves
-    double serial = 0;       ///< between the waves: taking in each wave's cubes, creating slot blocks, sorting the active cubes
-    double field = 0;        ///< ordering the defined vertices into the field (in parallel)
+    double serial = 0;       ///< between the waves: taking in each wave's cubes, creating slot blocks
+    double field = 0;        ///< ordering the defined vertices into the field (in parallel), while the active cubes are sorted
 
     static constexpr std::size_t kPhases = 5;
     /// (name, seconds) of each phase, in the order above: the one list the bench's table and JSON
