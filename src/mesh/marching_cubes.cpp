@@ -138,17 +138,20 @@ public:
             }
         }
 
-        std::array<bool, 12> visited{};
+        // The loops, each from its smallest edge not yet walked: `left` holds the edges that
+        // have a successor and are not walked yet (a bit mask instead of a scan of the 12 edges
+        // with a visited flag each, whose branches the CPU could not predict).
+        unsigned left = 0;
+        for (int e = 0; e < 12; ++e) left |= static_cast<unsigned>(next[static_cast<std::size_t>(e)] >= 0) << e;
         std::array<std::uint32_t, 12> loop{};
         std::array<int, 12> loop_edges{};
-        for (int start = 0; start < 12; ++start) {
-            if (next[start] < 0 || visited[start]) continue;
+        while (left) {
             int len = 0;
-            for (int e = start; !visited[e]; e = next[e]) {
-                visited[e] = true;
-                loop_edges[len] = e;
-                const int a = t.edge_lo[e], b = t.edge_hi[e];
-                loop[len++] = vertex_on_edge(base, a, b, *s[a], *s[b]);
+            for (int e = std::countr_zero(left); (left >> e) & 1u; e = next[static_cast<std::size_t>(e)]) {
+                left &= ~(1u << e);
+                loop_edges[static_cast<std::size_t>(len)] = e;
+                const int a = t.edge_lo[static_cast<std::size_t>(e)], b = t.edge_hi[static_cast<std::size_t>(e)];
+                loop[static_cast<std::size_t>(len++)] = vertex_on_edge(base, a, b, *s[static_cast<std::size_t>(a)], *s[static_cast<std::size_t>(b)]);
             }
             triangulate_loop(loop, loop_edges, len);
         }
@@ -200,15 +203,16 @@ private:
     }
 
     std::uint32_t vertex_on_edge(const VoxelKey& base, int ca, int cb, const VertexSample& sa, const VertexSample& sb) {
-        const VoxelKey a = base + corner_offset(ca), b = base + corner_offset(cb);
-        const int axis = edge_axis(ca, cb);
         const double fa = sa.tsdf, fb = sb.tsdf;
         const double t = fa / (fa - fb);  // fa and fb have opposite signs (or one is zero)
-        VertexId id{a, axis};
-        if (t <= 0) id = {a, 3};
-        else if (t >= 1) id = {b, 3};
-        std::uint32_t& slot = ids_[index_of(id.base == b ? sb : sa)][static_cast<std::size_t>(id.axis)];
+        // The vertex's identity: the edge (a, axis), or an end (axis 3) where the field is zero;
+        // most calls find it welded already, so the keys are formed only for a new vertex.
+        const bool at_a = t <= 0, at_b = !at_a && t >= 1;
+        const int axis = edge_axis(ca, cb);
+        std::uint32_t& slot = ids_[index_of(at_b ? sb : sa)][static_cast<std::size_t>(at_a || at_b ? 3 : axis)];
         if (slot != kNone) return slot;
+        const VoxelKey a = base + corner_offset(ca), b = base + corner_offset(cb);
+        const VertexId id = at_a ? VertexId{a, 3} : (at_b ? VertexId{b, 3} : VertexId{a, axis});
         slot = static_cast<std::uint32_t>(mesh_.vertices.size());
         vertex_ids_.push_back(id);
 

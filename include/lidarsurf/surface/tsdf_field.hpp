@@ -44,21 +44,36 @@ public:
         Known known(const VoxelKey& v) { return field_.known_at(index_.find(v)); }
         /// The samples of the corners of the cube with minimum corner `base` (corner c at base +
         /// (c & 1, c >> 1 & 1, c >> 2)); false, `s` partly set, at the first undefined one. A cube
-        /// whose corners share its block (7 in 8 per axis) costs one block lookup, not eight.
+        /// whose corners share its block (7 in 8 per axis) costs one block lookup, not eight; one
+        /// on its block's last layer along some axes, one lookup per block its corners are in.
         bool corners(const VoxelKey& base, std::array<const VertexSample*, 8>& s) {
             using Index = BlockMap<std::int32_t>;
             constexpr int m = Index::kSize - 1;
             auto step = [](int c) { return VoxelKey(c & 1, (c >> 1) & 1, c >> 2); };
-            if ((base.x() & m) != m && (base.y() & m) != m && (base.z() & m) != m) {
+            const std::int32_t* slot = index_.find(base);
+            if (!slot) return false;
+            const int last = ((base.x() & m) == m) | ((base.y() & m) == m) << 1 | ((base.z() & m) == m) << 2;
+            if (!last) {
                 // Within the block, corner c's slot is base's plus the block offset of its step.
-                const std::int32_t* slot = index_.find(base);
-                if (!slot) return false;
                 for (int c = 0; c < 8; ++c)
                     if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + Index::offset_of(step(c))))) return false;
                 return true;
             }
+            // Corner c lies in the block of base + (c & last), at its own offset there (the
+            // offsets wrap): the blocks first, each looked up once (the accessor remembers one).
+            std::array<const std::int32_t*, 8> block{};
+            block[0] = slot - Index::offset_of(base);
+            const VoxelKey base_block = Index::block_of(base);
+            for (int n = 1; n < 8; ++n) {
+                if (n & ~last) continue;
+                const Index::Block* b = field_.index_.find_block(base_block + step(n));
+                if (!b) return false;  // its corners are undefined
+                block[static_cast<std::size_t>(n)] = b->data();
+            }
             for (int c = 0; c < 8; ++c)
-                if (!(s[static_cast<std::size_t>(c)] = find(base + step(c)))) return false;
+                if (!(s[static_cast<std::size_t>(c)] =
+                          field_.sample_at(block[static_cast<std::size_t>(c & last)] + Index::offset_of(base + step(c)))))
+                    return false;
             return true;
         }
 
