@@ -304,25 +304,32 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
         builders[r] = std::make_unique<MeshBuilder>(field, placement, weld[r % 2]);
         mesh_cubes(*builders[r], cubes.data() + starts[r], cubes.data() + starts[r + 1]);
     });
-    // Global index of each run's vertices, and where each run's new vertices and triangles go.
-    std::vector<std::vector<std::uint32_t>> global(runs);
+    // The join, in parallel over the runs. First each run's vertices: a new one gets its rank
+    // among the run's new vertices, one on the plane z0 that run r - 1 created gets kShared | its
+    // index there; then, the runs' counts known, the global indices: run r's new vertices follow
+    // those of the runs before, in creation order (the serial pass's order). A vertex run r takes
+    // from run r - 1 is a new one there (run r - 1's own shared vertices lie on its first plane,
+    // below z0), so the lookup below takes one step (it would follow a longer chain).
+    constexpr std::uint32_t kShared = 0x80000000u;
+    std::vector<std::vector<std::uint32_t>> local(runs), global(runs);
     std::vector<std::size_t> vertex_base(runs + 1, 0), triangle_base(runs + 1, 0);
-    for (std::size_t r = 0; r < runs; ++r) {
+    tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
         const std::vector<VertexId>& ids = builders[r]->vertex_ids();
         const int z0 = cubes[starts[r]].z();
         const bool touches_previous = r > 0 && cubes[starts[r] - 1].z() == z0 - 1;
-        std::uint32_t next = static_cast<std::uint32_t>(vertex_base[r]);
-        global[r].resize(ids.size());
+        std::uint32_t rank = 0;
+        local[r].resize(ids.size());
         for (std::size_t i = 0; i < ids.size(); ++i) {
-            std::uint32_t shared = kNone;
-            if (touches_previous && ids[i].axis != 2 && ids[i].axis != 4 && ids[i].base.z() == z0) {
-                const std::uint32_t j = builders[r - 1]->find(ids[i]);
-                if (j != kNone) shared = global[r - 1][j];
-            }
-            global[r][i] = shared != kNone ? shared : next++;
+            std::uint32_t j = kNone;
+            if (touches_previous && ids[i].axis != 2 && ids[i].axis != 4 && ids[i].base.z() == z0) j = builders[r - 1]->find(ids[i]);
+            local[r][i] = j != kNone ? kShared | j : rank++;
         }
-        vertex_base[r + 1] = next;
-        triangle_base[r + 1] = triangle_base[r] + builders[r]->mesh().triangles.size();
+        vertex_base[r + 1] = rank;
+        triangle_base[r + 1] = builders[r]->mesh().triangles.size();
+    });
+    for (std::size_t r = 0; r < runs; ++r) {
+        vertex_base[r + 1] += vertex_base[r];
+        triangle_base[r + 1] += triangle_base[r];
     }
     Mesh out;
     out.vertices.resize(vertex_base[runs]);
@@ -332,16 +339,24 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
     out.triangles.resize(triangle_base[runs]);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
         const Mesh& m = builders[r]->mesh();
+        std::vector<std::uint32_t>& g = global[r];
+        g.resize(m.vertices.size());
         for (std::size_t i = 0; i < m.vertices.size(); ++i) {
-            const std::uint32_t g = global[r][i];
-            if (g < vertex_base[r]) continue;  // the previous run's vertex
-            out.vertices[g] = m.vertices[i];
-            out.normals[g] = m.normals[i];
-            out.levels[g] = m.levels[i];
-            out.confidence[g] = m.confidence[i];
+            if (const std::uint32_t l = local[r][i]; l & kShared) {
+                std::size_t owner = r - 1;  // the run that created it (run r - 1, see above)
+                std::uint32_t there = local[owner][l & ~kShared];
+                while (there & kShared) there = local[--owner][there & ~kShared];
+                g[i] = static_cast<std::uint32_t>(vertex_base[owner] + there);
+                continue;
+            }
+            g[i] = static_cast<std::uint32_t>(vertex_base[r] + local[r][i]);
+            out.vertices[g[i]] = m.vertices[i];
+            out.normals[g[i]] = m.normals[i];
+            out.levels[g[i]] = m.levels[i];
+            out.confidence[g[i]] = m.confidence[i];
         }
         for (std::size_t t = 0; t < m.triangles.size(); ++t)
-            for (int k = 0; k < 3; ++k) out.triangles[triangle_base[r] + t][static_cast<std::size_t>(k)] = global[r][m.triangles[t][static_cast<std::size_t>(k)]];
+            for (int k = 0; k < 3; ++k) out.triangles[triangle_base[r] + t][static_cast<std::size_t>(k)] = g[m.triangles[t][static_cast<std::size_t>(k)]];
     });
     return out;
 }
