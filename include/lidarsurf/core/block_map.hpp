@@ -111,14 +111,22 @@ public:
     Block& block(const VoxelKey& block) { return *blocks_[block_index(block)]; }
     /// Creation index of the block with key `block`, creating it if absent.
     std::uint32_t block_index(const VoxelKey& block) {
+        const auto [i, added] = block_index_unfilled(block);
+        if (added) blocks_.back()->fill(empty_);
+        return i;
+    }
+    /// As block_index(), but a block it creates (.second true) holds garbage until fill_block():
+    /// for creating many blocks (serial) and filling them in parallel.
+    std::pair<std::uint32_t, bool> block_index_unfilled(const VoxelKey& block) {
         const auto [i, added] = index_.try_emplace(block, static_cast<std::uint32_t>(blocks_.size()));
         if (added) {
             blocks_.push_back(new_block());
-            blocks_.back()->fill(empty_);
             block_keys_.push_back(block);
         }
-        return i;
+        return {i, added};
     }
+    /// Fills block i with the empty value (block_index_unfilled).
+    void fill_block(std::size_t i) { blocks_[i]->fill(empty_); }
 
     /// The slot of `key`, or nullptr when its block does not exist.
     const T* find(const VoxelKey& key) const {
