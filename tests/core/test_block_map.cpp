@@ -73,6 +73,28 @@ TEST(BlockMap, SlotsStayValidWhileBlocksAreAdded) {
     EXPECT_EQ(&first, map.find({0, 0, 0}));
 }
 
+// Blocks created unfilled (the seeded search creates them serially and fills them in parallel):
+// the same creation indices and keys as block_index(), a second request finds the block without
+// creating it, and once filled every slot holds the empty value.
+TEST(BlockMap, UnfilledBlocksAreFilledWithTheEmptyValue) {
+    BlockMap<std::int32_t> lazy(-7), eager(-7);
+    const std::vector<VoxelKey> blocks{{0, 0, 0}, {-3, 2, 9}, {0, 0, 0}, {5, -5, 1}, {-3, 2, 9}};
+    std::vector<std::uint32_t> created;
+    for (const VoxelKey& b : blocks) {
+        const auto [index, added] = lazy.block_index_unfilled(b);
+        ASSERT_EQ(index, eager.block_index(b));
+        if (added) created.push_back(index);
+    }
+    ASSERT_EQ(created.size(), 3u);  // three distinct keys
+    EXPECT_EQ(lazy.block_keys(), eager.block_keys());
+    for (std::uint32_t i : created) lazy.fill_block(i);
+    for (std::size_t i = 0; i < lazy.block_count(); ++i)
+        for (std::int32_t v : lazy.block_at(i)) ASSERT_EQ(v, -7) << i;
+    lazy[VoxelKey(1, 2, 3)] = 4;  // and the map works as usual
+    EXPECT_EQ(*lazy.find(VoxelKey(1, 2, 3)), 4);
+    EXPECT_EQ(*lazy.find(VoxelKey(0, 2, 3)), -7);
+}
+
 TEST(VoxelGrid, OccupancyBitsMatchTheIndex) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(-3.0, 3.0);
