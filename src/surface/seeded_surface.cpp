@@ -557,6 +557,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // created serially (one lookup per cube unless it is a block's last on some axis, or the
     // block changes), then each cube's corners are evaluated lazily and the cube classified, in
     // parallel chunks of a few cubes.
+    Slots::WriteAccessor slot_blocks(slots);  // remembers the blocks met recently, from wave to wave
     auto before_wave = [&](const std::vector<VoxelKey>& cubes) {
         std::optional<VoxelKey> last;
         for (const VoxelKey& cube : cubes) {
@@ -564,7 +565,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             const VoxelKey block = Slots::block_of(cube);
             const bool inner = (cube.x() & m) != m && (cube.y() & m) != m && (cube.z() & m) != m;  // all corners in `block`
             if (inner && last == block) continue;
-            for_each_corner_block(cube, [&](const VoxelKey& b) { slots.block_index(b); });
+            for_each_corner_block(cube, [&](const VoxelKey& b) { slot_blocks.block_index(b); });
             last = block;
         }
         lists.reserve(slots.block_count());

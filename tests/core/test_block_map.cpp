@@ -52,10 +52,12 @@ TEST(BlockMap, MatchesAnOrderedMapOnRandomKeys) {
         ASSERT_NE(map.find(k), nullptr);
         EXPECT_EQ(*map.find(k), value);
     }
-    // Every block's keys map back to that block; key_at inverts block_of/offset_of.
+    // Every block's keys map back to that block (also through the writer, whose table of recent
+    // blocks holds some of them); key_at inverts block_of/offset_of.
     for (std::size_t b = 0; b < map.block_count(); ++b) {
         const VoxelKey bk = map.block_keys()[b];
         EXPECT_EQ(map.index_of(bk), static_cast<std::int64_t>(b));
+        EXPECT_EQ(writer.block_index(bk), b);  // through the writer's recent-block table
         for (int o = 0; o < BlockMap<int>::kVolume; o += 37) {
             const VoxelKey k = BlockMap<int>::key_at(bk, o);
             EXPECT_EQ(BlockMap<int>::block_of(k), bk);

@@ -181,27 +181,51 @@ public:
         const Block* last_ = nullptr;
     };
 
-    /// Write access (creating blocks) that remembers the last block: for one thread.
+    /// Write access (creating blocks) that remembers the last block, and the blocks met recently
+    /// in a small direct-mapped table (the surface search's cubes alternate between a few
+    /// neighbouring blocks: one hash probe each time without it): for one thread.
     class WriteAccessor {
     public:
         explicit WriteAccessor(BlockMap& map) : map_(&map) {}
         T& operator[](const VoxelKey& key) {
             const VoxelKey b = block_of(key);
-            if (!last_ || b != last_key_) {
-                last_index_ = map_->block_index(b);
-                last_ = &map_->block_at(last_index_);
-                last_key_ = b;
-            }
+            if (!last_ || b != last_key_) use(b);
             return (*last_)[static_cast<std::size_t>(offset_of(key))];
+        }
+        /// Creation index of the block with key `block`, creating it if absent (as
+        /// BlockMap::block_index, through the same caches).
+        std::uint32_t block_index(const VoxelKey& block) {
+            if (!last_ || block != last_key_) use(block);
+            return last_index_;
         }
         /// Creation index of the block of the last key accessed.
         std::uint32_t block_index() const { return last_index_; }
 
     private:
+        struct Recent {
+            VoxelKey key = VoxelKey::Zero();
+            Block* block = nullptr;
+            std::uint32_t index = 0;
+        };
+        static constexpr int kRecentBits = 4;
+        void use(const VoxelKey& b) {
+            const std::uint32_t h = static_cast<std::uint32_t>(b.x()) * 0x9e3779b1u ^ static_cast<std::uint32_t>(b.y()) * 0x85ebca77u ^
+                                    static_cast<std::uint32_t>(b.z()) * 0xc2b2ae3du;
+            Recent& r = recent_[h >> (32 - kRecentBits)];
+            if (!r.block || r.key != b) {
+                r.key = b;
+                r.index = map_->block_index(b);
+                r.block = &map_->block_at(r.index);
+            }
+            last_ = r.block;
+            last_index_ = r.index;
+            last_key_ = b;
+        }
         BlockMap* map_;
         VoxelKey last_key_ = VoxelKey::Zero();
         Block* last_ = nullptr;
         std::uint32_t last_index_ = 0;
+        std::array<Recent, std::size_t{1} << kRecentBits> recent_{};
     };
 
 private:
