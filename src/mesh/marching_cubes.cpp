@@ -311,7 +311,7 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
     // from run r - 1 is a new one there (run r - 1's own shared vertices lie on its first plane,
     // below z0), so the lookup below takes one step (it would follow a longer chain).
     constexpr std::uint32_t kShared = 0x80000000u;
-    std::vector<std::vector<std::uint32_t>> local(runs), global(runs);
+    std::vector<std::vector<std::uint32_t>> local(runs);
     std::vector<std::size_t> vertex_base(runs + 1, 0), triangle_base(runs + 1, 0);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
         const std::vector<VertexId>& ids = builders[r]->vertex_ids();
@@ -339,8 +339,7 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
     out.triangles.resize(triangle_base[runs]);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
         const Mesh& m = builders[r]->mesh();
-        std::vector<std::uint32_t>& g = global[r];
-        g.resize(m.vertices.size());
+        std::vector<std::uint32_t> g(m.vertices.size());  // global index of each of the run's vertices
         for (std::size_t i = 0; i < m.vertices.size(); ++i) {
             if (const std::uint32_t l = local[r][i]; l & kShared) {
                 std::size_t owner = r - 1;  // the run that created it (run r - 1, see above)
