@@ -74,9 +74,8 @@ void for_each_corner_block(const VoxelKey& block, const BlockMask& bases, F&& f)
 // is its block's last (same order).
 template <typename F>
 void for_each_corner_block(const VoxelKey& cube, F&& f) {
-    constexpr int m = BlockMap<std::int32_t>::kSize - 1;
     const VoxelKey block = BlockMap<std::int32_t>::block_of(cube);
-    const int last_on = ((cube.x() & m) == m) | ((cube.y() & m) == m) << 1 | ((cube.z() & m) == m) << 2;
+    const int last_on = BlockMap<std::int32_t>::last_axes(cube);
     for (int n = 0; n < 8; ++n)
         if ((n & ~last_on) == 0) f(block + VoxelKey(n & 1, (n >> 1) & 1, n >> 2));
 }
@@ -561,10 +560,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     auto before_wave = [&](const std::vector<VoxelKey>& cubes) {
         std::optional<VoxelKey> last;
         for (const VoxelKey& cube : cubes) {
-            constexpr int m = Slots::kSize - 1;
             const VoxelKey block = Slots::block_of(cube);
-            const bool inner = (cube.x() & m) != m && (cube.y() & m) != m && (cube.z() & m) != m;  // all corners in `block`
-            if (inner && last == block) continue;
+            if (Slots::last_axes(cube) == 0 && last == block) continue;  // all its corners in `block`, which exists
             for_each_corner_block(cube, [&](const VoxelKey& b) { slot_blocks.block_index(b); });
             last = block;
         }

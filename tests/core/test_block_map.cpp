@@ -62,6 +62,11 @@ TEST(BlockMap, MatchesAnOrderedMapOnRandomKeys) {
             const VoxelKey k = BlockMap<int>::key_at(bk, o);
             EXPECT_EQ(BlockMap<int>::block_of(k), bk);
             EXPECT_EQ(BlockMap<int>::offset_of(k), o);
+            // last_axes: the axes along which the next key is in another block.
+            int next_block_axes = 0;
+            for (int a = 0; a < 3; ++a)
+                next_block_axes |= (BlockMap<int>::block_of(k + VoxelKey::Unit(a)) != bk) << a;
+            EXPECT_EQ(BlockMap<int>::last_axes(k), next_block_axes);
         }
     }
 }

@@ -91,6 +91,12 @@ public:
         constexpr int m = kSize - 1;
         return (key.x() & m) | ((key.y() & m) << kBits) | ((key.z() & m) << (2 * kBits));
     }
+    /// Bit a (x = 0, y = 1, z = 2) set where `key` is its block's last slot along axis a: the axes
+    /// along which the cube with minimum corner `key` has corners in the next block.
+    static int last_axes(const VoxelKey& key) {
+        constexpr int m = kSize - 1;
+        return ((key.x() & m) == m) | ((key.y() & m) == m) << 1 | ((key.z() & m) == m) << 2;
+    }
     /// The key at `offset` of block `block` (inverse of block_of/offset_of).
     static VoxelKey key_at(const VoxelKey& block, int offset) {
         constexpr int m = kSize - 1;

@@ -48,11 +48,10 @@ public:
         /// on its block's last layer along some axes, one lookup per block its corners are in.
         bool corners(const VoxelKey& base, std::array<const VertexSample*, 8>& s) {
             using Index = BlockMap<std::int32_t>;
-            constexpr int m = Index::kSize - 1;
             auto step = [](int c) { return VoxelKey(c & 1, (c >> 1) & 1, c >> 2); };
             const std::int32_t* slot = index_.find(base);
             if (!slot) return false;
-            const int last = ((base.x() & m) == m) | ((base.y() & m) == m) << 1 | ((base.z() & m) == m) << 2;
+            const int last = Index::last_axes(base);
             if (!last) {
                 // Within the block, corner c's slot is base's plus the block offset of its step.
                 for (int c = 0; c < 8; ++c)
