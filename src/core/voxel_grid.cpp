@@ -45,7 +45,7 @@ void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
     origin_set_ = true;
 }
 
-std::int32_t VoxelGrid::voxel_index(const VoxelKey& key) {
+std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
     const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
     if (!last_block_ || block_key != last_block_key_) {
         const std::uint32_t b = index_.block_index(block_key);
@@ -109,21 +109,10 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     std::vector<std::uint32_t> voxel(n, kSkip);
     std::size_t dropped = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        if (!finite[i]) {
+        if (finite[i])
+            voxel[i] = static_cast<std::uint32_t>(voxel_index(keys[i]));
+        else
             ++dropped;
-            continue;
-        }
-        // Inline, the common case: a voxel already numbered in the block of the previous point
-        // (nine in ten points of a KITTI frame are in it); voxel_index() for the others.
-        const VoxelKey& key = keys[i];
-        if (last_block_ && BlockMap<std::int32_t>::block_of(key) == last_block_key_) {
-            const std::int32_t slot = (*last_block_)[static_cast<std::size_t>(BlockMap<std::int32_t>::offset_of(key))];
-            if (slot >= 0) {
-                voxel[i] = static_cast<std::uint32_t>(slot);
-                continue;
-            }
-        }
-        voxel[i] = static_cast<std::uint32_t>(voxel_index(key));
     }
     stats_.resize(keys_.size());  // the new voxels, empty
     // 3. The points of each voxel, in point order, then Welford's update per voxel in parallel:
