@@ -47,7 +47,7 @@ void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
 
 std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
     const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
-    if (!last_block_ || block_key != last_block_key_) {
+    if (!last_block_ || !same_key(block_key, last_block_key_)) {
         const std::uint32_t b = index_.block_index(block_key);
         if (b >= occupancy_.size()) {
             occupancy_.resize(b + 1, Occupancy{});

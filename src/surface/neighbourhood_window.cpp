@@ -140,6 +140,11 @@ using SumsFor = RawSums;
 // coordinates are < 2 K + 7 <= 135.
 constexpr std::uint8_t kPad = 200;
 constexpr std::size_t kLanes = 16;
+// Whether the box [l, h] (window coordinates) leaves the window [0, size)^3: one test rather than
+// Eigen's any(), which branches per coordinate.
+inline bool outside_window(const VoxelKey& l, const VoxelKey& h, int size) {
+    return ((l.x() | l.y() | l.z()) < 0) | (std::max({h.x(), h.y(), h.z()}) >= size);
+}
 // A layer of a window block that holds voxels of the list's region (build_list).
 struct LayerBits {
     const PackedVoxels::Block* block;
@@ -371,7 +376,7 @@ void NeighbourhoodWindow::add_shell(const VoxelKey& lo, const VoxelKey& hi, int 
                                     Moments& acc) const {
     constexpr int B = Map::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
-    if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
+    if (outside_window(l, h, side_ * B))
         throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");
     // The hole: [l + inset, h - inset] in x and y, on the layers strictly inside [l.z, h.z].
     const VoxelKey il = l.array() + inset, ih = h.array() - inset;
@@ -411,7 +416,7 @@ template <bool Popcount>
                                                                       Moments& acc) const {
     constexpr int B = Map::kSize, m = B - 1;
     const VoxelKey l = lo - first_voxel_, h = hi - first_voxel_;  // window coordinates
-    if ((l.array() < 0).any() || (h.array() >= side_ * B).any())
+    if (outside_window(l, h, side_ * B))
         throw InvalidArgument("neighbourhood box beyond the window's blocks: build the window with the configuration's max_reach()");
     SumsFor<Popcount> sums(acc, p);
     const int bx0 = l.x() / B, bx1 = h.x() / B;
@@ -518,12 +523,12 @@ const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::first_list() const {
 }
 
 bool NeighbourhoodWindow::listed(const VoxelKey& v, int k) const {
-    return k >= 1 && k <= cube_level_ && Map::block_of(v) == vertex_block_;
+    return k >= 1 && k <= cube_level_ && same_key(Map::block_of(v), vertex_block_);
 }
 
 const std::uint8_t* NeighbourhoodWindow::levels(const VoxelKey& v) const {
     const VoxelList& list = this->list();
-    if (levels_valid_ && level_vertex_ == v) return levels_.data();
+    if (levels_valid_ && same_key(level_vertex_, v)) return levels_.data();
     const VoxelKey r = (v - vertex_block_ * Map::kSize).array() + cube_level_;  // region coordinates, in [K, K + 7]
     const ListArrays arrays = arrays_of(list);
     if (levels_.size() < arrays.count) levels_.resize(arrays.count);

@@ -380,7 +380,7 @@ private:
     std::optional<TsdfField::Known> reusable(const VoxelKey& v) {
         if (!previous_) return std::nullopt;
         const VoxelKey block = Slots::block_of(v);
-        if (!clean_block_ || *clean_block_ != block) {
+        if (!clean_block_ || !same_key(*clean_block_, block)) {
             if (s_.dirty.find(block) != BlockIndex::kAbsent) return std::nullopt;
             clean_block_ = block;
         }
@@ -391,7 +391,7 @@ private:
     // The window of a vertex block, from the last few built (a cube's corners are in 1 to 8).
     const NeighbourhoodWindow& window(const VoxelKey& block) {
         for (int w = 0; w < kWindows; ++w)
-            if (windows_[w] && window_block_[w] == block) return *windows_[w];
+            if (windows_[w] && same_key(window_block_[w], block)) return *windows_[w];
         const int w = next_window_++ % kWindows;
         if (windows_[w]) windows_[w]->reset(block);
         else windows_[w].emplace(s_.packed, block, s_.config.max_reach(), s_.config.max_level());
@@ -561,7 +561,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         std::optional<VoxelKey> last;
         for (const VoxelKey& cube : cubes) {
             const VoxelKey block = Slots::block_of(cube);
-            if (Slots::last_axes(cube) == 0 && last == block) continue;  // all its corners in `block`, which exists
+            if (Slots::last_axes(cube) == 0 && last && same_key(*last, block)) continue;  // all its corners in `block`, which exists
             for_each_corner_block(cube, [&](const VoxelKey& b) { slot_blocks.block_index(b); });
             last = block;
         }

@@ -172,7 +172,7 @@ public:
         explicit Accessor(const BlockMap& map) : map_(&map) {}
         const T* find(const VoxelKey& key) {
             const VoxelKey b = block_of(key);
-            if (!last_ || b != last_key_) {
+            if (!last_ || !same_key(b, last_key_)) {
                 const Block* found = map_->find_block(b);
                 if (!found) return nullptr;
                 last_key_ = b;
@@ -195,13 +195,13 @@ public:
         explicit WriteAccessor(BlockMap& map) : map_(&map) {}
         T& operator[](const VoxelKey& key) {
             const VoxelKey b = block_of(key);
-            if (!last_ || b != last_key_) use(b);
+            if (!last_ || !same_key(b, last_key_)) use(b);
             return (*last_)[static_cast<std::size_t>(offset_of(key))];
         }
         /// Creation index of the block with key `block`, creating it if absent (as
         /// BlockMap::block_index, through the same caches).
         std::uint32_t block_index(const VoxelKey& block) {
-            if (!last_ || block != last_key_) use(block);
+            if (!last_ || !same_key(block, last_key_)) use(block);
             return last_index_;
         }
         /// Creation index of the block of the last key accessed.
@@ -218,7 +218,7 @@ public:
             const std::uint32_t h = static_cast<std::uint32_t>(b.x()) * 0x9e3779b1u ^ static_cast<std::uint32_t>(b.y()) * 0x85ebca77u ^
                                     static_cast<std::uint32_t>(b.z()) * 0xc2b2ae3du;
             Recent& r = recent_[h >> (32 - kRecentBits)];
-            if (!r.block || r.key != b) {
+            if (!r.block || !same_key(r.key, b)) {
                 r.key = b;
                 r.index = map_->block_index(b);
                 r.block = &map_->block_at(r.index);

@@ -115,7 +115,7 @@ private:
     /// the common case (a voxel already numbered in the previous point's block: nine in ten
     /// points of a KITTI frame); the others go through voxel_index_slow.
     std::int32_t voxel_index(const VoxelKey& key) {
-        if (last_block_ && BlockMap<std::int32_t>::block_of(key) == last_block_key_)
+        if (last_block_ && same_key(BlockMap<std::int32_t>::block_of(key), last_block_key_))
             if (const std::int32_t slot = (*last_block_)[static_cast<std::size_t>(BlockMap<std::int32_t>::offset_of(key))]; slot >= 0)
                 return slot;
         return voxel_index_slow(key);
