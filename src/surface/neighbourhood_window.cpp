@@ -154,6 +154,10 @@ struct LayerBits {
 // The address that marks a window block not looked up yet (never dereferenced).
 const PackedVoxels::Block kNotLookedUpBlock{};
 const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
+// What a window block that holds no voxel points to: no layer holds a voxel, so the walks skip it
+// with the test of its layers they make anyway (a separate test for an absent block mispredicted
+// as often).
+const PackedVoxels::Block kNoVoxels{};
 
 #if defined(LIDARSURF_SSE2)
 // L_a = max(v, i + 1) - min(v, i) for 16 coordinates i (unsigned bytes, no wrap: i + 1 <= 201).
@@ -349,7 +353,8 @@ inline const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int
 }
 
 const PackedVoxels::Block* NeighbourhoodWindow::look_up(int bx, int by, int bz) const {
-    return voxels_->find(Map::block_of(first_voxel_) + VoxelKey(bx, by, bz));
+    const PackedVoxels::Block* b = voxels_->find(Map::block_of(first_voxel_) + VoxelKey(bx, by, bz));
+    return b ? b : &kNoVoxels;
 }
 
 template <typename F>
@@ -359,7 +364,6 @@ void NeighbourhoodWindow::for_each_block(const VoxelKey& l, const VoxelKey& h, F
         for (int by = l.y() / B; by <= h.y() / B; ++by)
             for (int bx = l.x() / B; bx <= h.x() / B; ++bx) {
                 const PackedVoxels::Block* block = this->block(bx, by, bz);
-                if (!block) continue;
                 // The box's layers within this block that hold a voxel (most blocks of a lidar
                 // frame hold a few layers of ground or facade): the others are skipped.
                 const int z0 = std::max(l.z(), bz * B), z1 = std::min(h.z(), bz * B + m);
@@ -430,7 +434,6 @@ template <bool Popcount>
             const std::uint64_t hole_rows = ring && hy0 <= hy1 ? layer_rows(hy0 & m, hy1 & m) : 0;
             for (int bx = bx0; bx <= bx1; ++bx) {
                 const PackedVoxels::Block* block = this->block(bx, by, bz);
-                if (!block) continue;
                 unsigned layers = block->layers & slab_layers;
                 if (!layers) continue;
                 std::uint64_t mask = layer_columns(std::max(l.x(), bx * B) & m, std::min(h.x(), bx * B + m) & m) & rows;

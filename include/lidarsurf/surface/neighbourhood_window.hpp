@@ -160,7 +160,7 @@ private:
     int side_;     // 2 radius + 1
     VoxelKey vertex_block_;
     VoxelKey first_voxel_;  // smallest voxel key covered by the window
-    // side^3 blocks, x fastest: nullptr when the block holds no voxel, kNotLookedUp before the
+    // side^3 blocks, x fastest: kNoVoxels (layers 0) when the block holds no voxel, kNotLookedUp before the
     // first box that reaches it. Most boxes stay within the 3x3x3 blocks around the vertex block
     // (the 5x5x5 of the radial slabs are reached along one axis), and a window is built per
     // vertex block a task meets, so looking all of them up front cost ~9 % of a KITTI frame.
