@@ -80,22 +80,32 @@ void for_each_corner_block(const VoxelKey& cube, F&& f) {
         if ((n & ~last_on) == 0) f(block + VoxelKey(n & 1, (n >> 1) & 1, n >> 2));
 }
 
-// The 6 faces: corner indices and the direction to the neighbouring cube.
+// The 6 faces: corner indices and the direction (axis, sign) to the neighbouring cube.
 struct Face {
     std::array<int, 4> corners;
-    VoxelKey step;
+    int axis, sign;
 };
-const std::array<Face, 6>& faces() {
-    static const std::array<Face, 6> f{{
-        {{0, 2, 4, 6}, VoxelKey(-1, 0, 0)},
-        {{1, 3, 5, 7}, VoxelKey(1, 0, 0)},
-        {{0, 1, 4, 5}, VoxelKey(0, -1, 0)},
-        {{2, 3, 6, 7}, VoxelKey(0, 1, 0)},
-        {{0, 1, 2, 3}, VoxelKey(0, 0, -1)},
-        {{4, 5, 6, 7}, VoxelKey(0, 0, 1)},
-    }};
-    return f;
-}
+constexpr std::array<Face, 6> kFaces{{
+    {{0, 2, 4, 6}, 0, -1},
+    {{1, 3, 5, 7}, 0, 1},
+    {{0, 1, 4, 5}, 1, -1},
+    {{2, 3, 6, 7}, 1, 1},
+    {{0, 1, 2, 3}, 2, -1},
+    {{4, 5, 6, 7}, 2, 1},
+}};
+// Bit f set when the surface crosses face f of a cube whose corners' signs are `config` (bit c
+// set when corner c is negative): the face's four corners are not all of one sign. A table, so
+// that classifying a cube tests no face one by one (those tests mispredicted about once a cube).
+constexpr std::array<std::uint8_t, 256> kCrossedFaces = [] {
+    std::array<std::uint8_t, 256> t{};
+    for (int config = 0; config < 256; ++config)
+        for (int f = 0; f < 6; ++f) {
+            int neg = 0;
+            for (int c : kFaces[static_cast<std::size_t>(f)].corners) neg += (config >> c) & 1;
+            if (neg != 0 && neg != 4) t[static_cast<std::size_t>(config)] |= static_cast<std::uint8_t>(1 << f);
+        }
+    return t;
+}();
 
 // The samples of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2), nullptr if undefined).
 using CornerSamples = std::array<const VertexSample*, 8>;
@@ -107,9 +117,9 @@ using CornerSamples = std::array<const VertexSample*, 8>;
 // `seeding`, the 8 cubes around such a corner are next as well.
 template <typename Active, typename Next>
 void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerSamples& s, Active&& active, Next&& next) {
-    int negatives = 0;
-    for (int c = 0; c < 8; ++c) negatives += s[c]->tsdf < 0;
-    if (negatives == 0 || negatives == 8) {
+    unsigned config = 0;
+    for (int c = 0; c < 8; ++c) config |= static_cast<unsigned>(s[static_cast<std::size_t>(c)]->tsdf < 0) << c;
+    if (config == 0 || config == 255) {
         if (!seeding) return;
         for (int c = 0; c < 8; ++c) {
             if (!(std::fabs(s[c]->tsdf) <= eps)) continue;
@@ -119,10 +129,11 @@ void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerS
         return;
     }
     active(cube);
-    for (const Face& f : faces()) {
-        int neg = 0;
-        for (int c : f.corners) neg += s[c]->tsdf < 0;
-        if (neg != 0 && neg != 4) next(cube + f.step);
+    for (unsigned crossed = kCrossedFaces[config]; crossed; crossed &= crossed - 1) {  // in face order
+        const Face& f = kFaces[static_cast<std::size_t>(std::countr_zero(crossed))];
+        VoxelKey n = cube;
+        n[f.axis] += f.sign;
+        next(n);
     }
 }
 
