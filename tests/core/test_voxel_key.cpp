@@ -57,3 +57,19 @@ TEST(VoxelKey, SortZyxIsTheLexicographicOrder) {
     sort_zyx(none);
     EXPECT_TRUE(none.empty());
 }
+
+// same_key against the coordinate-by-coordinate comparison, on keys that differ in one, two or
+// three coordinates (by small and by sign-crossing amounts) and on equal ones.
+TEST(VoxelKey, SameKeyIsCoordinateWiseEquality) {
+    const std::vector<VoxelKey> keys = random_keys(400, -kMaxLatticeIndex, kMaxLatticeIndex, 7);
+    for (const VoxelKey& a : keys) {
+        EXPECT_TRUE(same_key(a, a));
+        for (int bits = 1; bits < 8; ++bits)
+            for (int delta : {1, -1, 1 << 20, -(1 << 30)}) {
+                VoxelKey b = a;
+                for (int axis = 0; axis < 3; ++axis)
+                    if ((bits >> axis) & 1) b[axis] += delta;
+                EXPECT_EQ(same_key(a, b), a.x() == b.x() && a.y() == b.y() && a.z() == b.z()) << a.transpose() << " / " << b.transpose();
+            }
+    }
+}

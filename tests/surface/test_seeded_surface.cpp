@@ -108,6 +108,64 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
     }
 }
 
+// The cube search against a plain flood fill over the reference field (std::set, the signs of each
+// face's four corners counted directly): from the occupied voxels' cubes, a cube with its 8 corners
+// defined and both signs among them is active and leads through each face whose corners have both
+// signs; a seed whose corners share one sign leads to the 8 cubes around each corner with
+// |TSDF| <= 1e-6 alpha (zero counts as positive).
+TEST(SeededSurface, TheSearchIsAFloodFillThroughCrossedFaces) {
+    const Eigen::Vector3d origin(1.0, -2.0, 0.3);
+    const PointCloud cloud = sim::simulate_scan(offroad(), sim::SensorModel::hdl64(), origin, 5);
+    const ReconstructionConfig c;
+    VoxelGrid grid(c.voxel_size, origin);
+    for (const Eigen::Vector3d& p : cloud.points) grid.insert(p);
+    const TsdfField field = compute_tsdf(grid, c, origin);
+    const double eps = 1e-6 * c.voxel_size;
+    auto key_of = [](const VoxelKey& k) { return std::make_tuple(k.x(), k.y(), k.z()); };
+    std::set<std::tuple<int, int, int>> visited, active;
+    std::vector<VoxelKey> queue;
+    auto visit = [&](const VoxelKey& cube) {
+        if (visited.insert(key_of(cube)).second) queue.push_back(cube);
+    };
+    for (const VoxelKey& k : grid.keys()) visit(k);
+    const std::size_t seeds = queue.size();
+    for (std::size_t i = 0; i < queue.size(); ++i) {
+        const VoxelKey cube = queue[i];
+        std::array<const VertexSample*, 8> s{};
+        bool defined = true;
+        for (int n = 0; n < 8; ++n) defined = defined && (s[static_cast<std::size_t>(n)] = field.find(cube + VoxelKey(n & 1, (n >> 1) & 1, n >> 2)));
+        if (!defined) continue;
+        auto negative = [&](int n) { return s[static_cast<std::size_t>(n)]->tsdf < 0; };
+        int negatives = 0;
+        for (int n = 0; n < 8; ++n) negatives += negative(n);
+        if (negatives == 0 || negatives == 8) {
+            if (i >= seeds) continue;
+            for (int n = 0; n < 8; ++n)
+                if (std::abs(s[static_cast<std::size_t>(n)]->tsdf) <= eps)
+                    for (int m = 0; m < 8; ++m) visit(cube + VoxelKey(n & 1, (n >> 1) & 1, n >> 2) - VoxelKey(m & 1, (m >> 1) & 1, m >> 2));
+            continue;
+        }
+        active.insert(key_of(cube));
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                int face_negatives = 0;  // corners with bit `axis` equal to `side`
+                for (int n = 0; n < 8; ++n) face_negatives += ((n >> axis) & 1) == side && negative(n);
+                if (face_negatives == 0 || face_negatives == 4) continue;
+                VoxelKey next = cube;
+                next[axis] += side ? 1 : -1;
+                visit(next);
+            }
+    }
+    const std::vector<VoxelKey> cubes = seeded_cubes(field, grid, 0);
+    ASSERT_GT(active.size(), 1000u);
+    std::set<std::tuple<int, int, int>> found;
+    for (const VoxelKey& k : cubes) found.insert(key_of(k));
+    EXPECT_EQ(found.size(), cubes.size()) << "a cube listed twice";
+    EXPECT_TRUE(found == active) << found.size() << " cubes found, " << active.size() << " by the flood fill";
+    // And the fast path, which runs the same search while it evaluates, finds them too.
+    EXPECT_EQ(compute_seeded_tsdf(grid, c, origin).cubes, cubes);
+}
+
 // Seeds dilated by d cubes: the fast path finds the seeds' corners per block (occupancy dilated
 // by [-d, d + 1], across block borders when d + 1 > 8 - 1) and still gives the reference mesh.
 TEST(SeededSurface, FastPathGivesTheReferenceMeshWithDilatedSeeds) {
