@@ -238,8 +238,10 @@ private:
     void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
         if (a == b || b == c || a == c) return;  // collapsed onto a zero-valued lattice vertex
         const Eigen::Vector3d& pa = mesh_.vertices[a];
-        const double area2 = (mesh_.vertices[b] - pa).cross(mesh_.vertices[c] - pa).norm();
-        if (!(area2 > 1e-12 * field_.voxel_size * field_.voxel_size)) return;  // zero-area
+        // Twice the area above 1e-12 alpha^2, compared squared (no square root per triangle).
+        const double area2_squared = (mesh_.vertices[b] - pa).cross(mesh_.vertices[c] - pa).squaredNorm();
+        const double min_area2 = 1e-12 * field_.voxel_size * field_.voxel_size;
+        if (!(area2_squared > min_area2 * min_area2)) return;  // zero-area
         mesh_.triangles.push_back({a, b, c});
     }
 
