@@ -107,22 +107,23 @@ constexpr std::array<std::uint8_t, 256> kCrossedFaces = [] {
     return t;
 }();
 
-// The samples of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2), nullptr if undefined).
-using CornerSamples = std::array<const VertexSample*, 8>;
+// The TSDF values of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2)): all the
+// search reads of a sample.
+using CornerValues = std::array<float, 8>;
 
-// What one cube of a wave tells the search, given its corners' samples `s`, all defined:
+// What one cube of a wave tells the search, given its corners' values `s`, all defined:
 // active(cube) when the surface crosses it, and next(c) for each cube it leads to, through each
 // face the surface crosses. A surface through a seed's corner (|value| <= eps, e.g. data lying on
 // a lattice plane) may cross only the neighbouring cubes (zero counts as positive): when
 // `seeding`, the 8 cubes around such a corner are next as well.
 template <typename Active, typename Next>
-void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerSamples& s, Active&& active, Next&& next) {
+void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerValues& s, Active&& active, Next&& next) {
     unsigned config = 0;
-    for (int c = 0; c < 8; ++c) config |= static_cast<unsigned>(s[static_cast<std::size_t>(c)]->tsdf < 0) << c;
+    for (int c = 0; c < 8; ++c) config |= static_cast<unsigned>(s[static_cast<std::size_t>(c)] < 0) << c;
     if (config == 0 || config == 255) {
         if (!seeding) return;
         for (int c = 0; c < 8; ++c) {
-            if (!(std::fabs(s[c]->tsdf) <= eps)) continue;
+            if (!(std::fabs(s[static_cast<std::size_t>(c)]) <= eps)) continue;
             const VoxelKey v = corner(cube, c);
             for (int n = 0; n < 8; ++n) next(v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1));  // the 8 cubes around v
         }
@@ -168,7 +169,7 @@ public:
     /// runs in parallel, so absorb(), which is serial, has fewer cubes to visit).
     template <typename View>
     void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next) const {
-        CornerSamples s;
+        CornerValues s;
         if (!view.corners(cube, s)) return;  // a corner is undefined: not active, leads nowhere
         BlockMap<std::uint8_t>::Accessor seen(visited_);
         classify_cube(
@@ -251,7 +252,12 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
     // Every vertex is already evaluated.
     struct FieldView {
         TsdfField::Accessor values;
-        bool corners(const VoxelKey& cube, CornerSamples& s) { return values.corners(cube, s); }
+        bool corners(const VoxelKey& cube, CornerValues& s) {
+            std::array<const VertexSample*, 8> samples;
+            if (!values.corners(cube, samples)) return false;
+            for (std::size_t c = 0; c < 8; ++c) s[c] = samples[c]->tsdf;
+            return true;
+        }
     };
     std::vector<VoxelKey> cubes = search.run(true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {});
     sort_zyx(cubes);
@@ -260,18 +266,42 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
 
 namespace {
 
-// A defined vertex evaluated by the fast path, and where they are kept (in evaluation order).
+// A defined vertex evaluated by the fast path, and where they are kept (in evaluation order):
+// chunks of kRun entries, each with its entries' TSDF values apart, so that the search, which
+// reads only those, touches 4 bytes per vertex rather than a 40-byte entry (the entries of a
+// KITTI frame, 5 MB, do not fit the L2 cache). Entry i is entries[i % kRun] of chunk i / kRun.
 struct Evaluated {
     VoxelKey key;
     VertexSample sample;
 };
-using EvaluatedStore = tbb::concurrent_vector<Evaluated, std::allocator<Evaluated>>;
+struct StoreChunk {
+    static constexpr std::size_t kRun = 1024;
+    StoreChunk() {}  // the values are written when an entry is filled
+    std::array<float, kRun> tsdf;
+    std::array<Evaluated, kRun> entries;
+};
+class EvaluatedStore {
+public:
+    static constexpr std::size_t kRun = StoreChunk::kRun;
+    void reserve(std::size_t entries) { chunks_.reserve((entries + kRun - 1) / kRun); }
+    /// Claims a run of kRun entries (thread-safe); returns the first one's index.
+    std::size_t claim_run() { return static_cast<std::size_t>(chunks_.grow_by(1) - chunks_.begin()) * kRun; }
+    void set(std::size_t i, const VoxelKey& key, const VertexSample& sample) {
+        StoreChunk& c = chunks_[i / kRun];
+        c.tsdf[i % kRun] = sample.tsdf;
+        c.entries[i % kRun] = {key, sample};
+    }
+    float tsdf(std::size_t i) const { return chunks_[i / kRun].tsdf[i % kRun]; }
+    const Evaluated& operator[](std::size_t i) const { return chunks_[i / kRun].entries[i % kRun]; }
+
+private:
+    tbb::concurrent_vector<StoreChunk, std::allocator<StoreChunk>> chunks_;
+};
 // The part of the store a thread has claimed and not filled yet: the threads claim the store in
 // runs of kRun entries (one shared atomic per run instead of one per vertex: on the Xeon of
 // session 15 the per-vertex push_back and counter increments, contended by both cores, were a
 // tenth of a KITTI frame). Entries left unfilled at the end are never referenced by a slot.
 struct StoreRun {
-    static constexpr std::size_t kRun = 1024;
     std::size_t next = 0, end = 0;
 };
 
@@ -327,36 +357,39 @@ public:
         if (reused_) s_.reused.fetch_add(reused_, std::memory_order_relaxed);
     }
 
-    /// Vertex v's sample (nullptr if undefined), evaluating it if nobody has.
-    const VertexSample* sample(const VoxelKey& v) {
+    /// Whether vertex v is defined, evaluating it if nobody has; its TSDF value in `value` if so.
+    bool sample(const VoxelKey& v, float& value) {
         // The block exists and is not const: the accessor only caches it.
         std::int32_t& slot = *const_cast<std::int32_t*>(values_.find(v));
         // Most calls find the vertex already evaluated (two thirds on a lidar frame): answered
         // inline, the evaluation (with its large stack frame) only when needed.
         const std::int32_t state = std::atomic_ref<std::int32_t>(slot).load(std::memory_order_acquire);
-        if (state >= 0) [[likely]]
-            return &s_.defined[static_cast<std::size_t>(state)].sample;
-        if (state == kUndefined) return nullptr;
-        return claim_or_wait(v, slot, state);
+        if (state >= 0) [[likely]] {
+            value = s_.defined.tsdf(static_cast<std::size_t>(state));
+            return true;
+        }
+        if (state == kUndefined) return false;
+        return claim_or_wait(v, slot, state, value);
     }
     /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
     /// undefined corner cannot be active, so they are evaluated lazily, stopping at the first
     /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
     /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
     /// only on their values, so the set of evaluated vertices does not depend on the order.
-    bool corners(const VoxelKey& cube, CornerSamples& s) {
+    bool corners(const VoxelKey& cube, CornerValues& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
-        if (!(s[even] = sample(even_corner(cube))) || !(s[7 ^ even] = sample(odd_corner(cube)))) return false;
+        if (!sample(even_corner(cube), s[static_cast<std::size_t>(even)]) || !sample(odd_corner(cube), s[static_cast<std::size_t>(7 ^ even)]))
+            return false;
         for (int c = 0; c < 8; ++c)
-            if (c != even && c != (7 ^ even) && !(s[c] = sample(corner(cube, c)))) return false;
+            if (c != even && c != (7 ^ even) && !sample(corner(cube, c), s[static_cast<std::size_t>(c)])) return false;
         return true;
     }
 
 private:
     // sample() for a vertex not evaluated yet (`state` kUnevaluated) or being evaluated by
     // another thread (kBusy): claims and evaluates it, or waits for its value.
-    [[gnu::noinline]] const VertexSample* claim_or_wait(const VoxelKey& v, std::int32_t& slot_ref, std::int32_t state) {
+    [[gnu::noinline]] bool claim_or_wait(const VoxelKey& v, std::int32_t& slot_ref, std::int32_t state, float& value) {
         std::atomic_ref<std::int32_t> slot(slot_ref);
         if (state == kUnevaluated && slot.compare_exchange_strong(state, kBusy, std::memory_order_acq_rel)) {
             state = kUndefined;
@@ -375,16 +408,18 @@ private:
             std::this_thread::yield();
             state = slot.load(std::memory_order_acquire);
         }
-        return state >= 0 ? &s_.defined[static_cast<std::size_t>(state)].sample : nullptr;
+        if (state < 0) return false;
+        value = s_.defined.tsdf(static_cast<std::size_t>(state));
+        return true;
     }
     // Keeps v's sample in the thread's run of the store (claiming a new run when it is full) and
     // returns its index there.
     std::int32_t store(const VoxelKey& v, const VertexSample& sample) {
         if (run_.next == run_.end) {
-            run_.next = static_cast<std::size_t>(s_.defined.grow_by(StoreRun::kRun) - s_.defined.begin());
-            run_.end = run_.next + StoreRun::kRun;
+            run_.next = s_.defined.claim_run();
+            run_.end = run_.next + EvaluatedStore::kRun;
         }
-        s_.defined[run_.next] = {v, sample};
+        s_.defined.set(run_.next, v, sample);
         return static_cast<std::int32_t>(run_.next++);
     }
     // What `previous` recorded for v when v's block is clean and v was evaluated then.
