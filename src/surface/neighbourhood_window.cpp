@@ -151,9 +151,6 @@ struct LayerBits {
     int bx, by, z;
     std::uint64_t bits;
 };
-// The address that marks a window block not looked up yet (never dereferenced).
-const PackedVoxels::Block kNotLookedUpBlock{};
-const PackedVoxels::Block* const kNotLookedUp = &kNotLookedUpBlock;
 // What a window block that holds no voxel points to: no layer holds a voxel, so the walks skip it
 // with the test of its layers they make anyway (a separate test for an absent block mispredicted
 // as often).
@@ -332,7 +329,13 @@ NeighbourhoodWindow::NeighbourhoodWindow(const PackedVoxels& voxels, const Voxel
 void NeighbourhoodWindow::reset(const VoxelKey& vertex_block) {
     vertex_block_ = vertex_block;
     first_voxel_ = (vertex_block.array() - radius_) * Map::kSize;
-    blocks_.assign(static_cast<std::size_t>(side_ * side_ * side_), kNotLookedUp);
+    // Every block "not looked up yet": a new stamp (a window is reset ~12k times per KITTI frame;
+    // writing its 125 entries each time was 12 MB of stores), the entries once when it wraps.
+    const auto volume = static_cast<std::size_t>(side_ * side_ * side_);
+    if (blocks_.size() != volume || ++stamp_ == 0) {
+        blocks_.assign(volume, WindowBlock{});
+        stamp_ = 1;
+    }
     simd_ = simd_level();
     shared_ = nullptr;
     list_ = nullptr;
@@ -346,10 +349,10 @@ void NeighbourhoodWindow::share_list(SharedList* list) {
 }
 
 inline const PackedVoxels::Block* NeighbourhoodWindow::block(int bx, int by, int bz) const {
-    const PackedVoxels::Block*& b = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
-    if (b == kNotLookedUp) [[unlikely]]
-        b = look_up(bx, by, bz);
-    return b;
+    WindowBlock& b = blocks_[static_cast<std::size_t>(bx + side_ * (by + side_ * bz))];
+    if (b.stamp != stamp_) [[unlikely]]
+        b = {look_up(bx, by, bz), stamp_};
+    return b.block;
 }
 
 const PackedVoxels::Block* NeighbourhoodWindow::look_up(int bx, int by, int bz) const {

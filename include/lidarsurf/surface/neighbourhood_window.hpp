@@ -160,11 +160,17 @@ private:
     int side_;     // 2 radius + 1
     VoxelKey vertex_block_;
     VoxelKey first_voxel_;  // smallest voxel key covered by the window
-    // side^3 blocks, x fastest: kNoVoxels (layers 0) when the block holds no voxel, kNotLookedUp before the
-    // first box that reaches it. Most boxes stay within the 3x3x3 blocks around the vertex block
-    // (the 5x5x5 of the radial slabs are reached along one axis), and a window is built per
-    // vertex block a task meets, so looking all of them up front cost ~9 % of a KITTI frame.
-    mutable std::vector<const PackedVoxels::Block*> blocks_;
+    // side^3 blocks, x fastest: kNoVoxels (layers 0) when the block holds no voxel; looked up when
+    // a box first reaches them (an entry whose stamp is not stamp_ is not looked up yet). Most
+    // boxes stay within the 3x3x3 blocks around the vertex block (the 5x5x5 of the radial slabs
+    // are reached along one axis), and a window is built per vertex block a task meets, so
+    // looking all of them up front cost ~9 % of a KITTI frame.
+    struct WindowBlock {
+        const PackedVoxels::Block* block = nullptr;
+        std::uint32_t stamp = 0;
+    };
+    mutable std::vector<WindowBlock> blocks_;
+    std::uint32_t stamp_ = 0;
 
     SharedList* shared_ = nullptr;          // where the list is shared (nullptr: own_)
     mutable const VoxelList* list_ = nullptr;  // the list in use, nullptr until first use
