@@ -276,7 +276,7 @@ struct Evaluated {
 };
 struct StoreChunk {
     static constexpr std::size_t kRun = 1024;
-    StoreChunk() {}  // the values are written when an entry is filled
+    StoreChunk() {}  // tsdf left unset: a value is written with its entry
     std::array<float, kRun> tsdf;
     std::array<Evaluated, kRun> entries;
 };
