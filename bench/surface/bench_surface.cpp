@@ -8,6 +8,7 @@
 #include "bench_data.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
+#include "lidarsurf/surface/plane_eigen.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
@@ -77,6 +78,26 @@ void BM_PlaneAndConfidence(benchmark::State& state) {
     state.SetLabel(solver == EigenSolver::Iterative ? "iterative" : "closed form");
 }
 BENCHMARK(BM_PlaneAndConfidence)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The closed-form eigen solver alone on the covariances of H^3 of each vertex: one call per
+// matrix (0) against four matrices per call in AVX2 lanes (1; four calls below the Avx2 level).
+void BM_PlaneEigen(benchmark::State& state) {
+    std::vector<Eigen::Matrix3d> covariances;
+    for (const VoxelKey& v : vertices())
+        if (const VoxelStats s = merge_neighbourhood(grid(), v, 3); s.count >= 3) covariances.push_back(s.covariance());
+    covariances.resize(covariances.size() / 4 * 4);
+    const bool lanes = state.range(0) != 0;
+    for (auto _ : state) {
+        if (lanes)
+            for (std::size_t i = 0; i < covariances.size(); i += 4)
+                benchmark::DoNotOptimize(plane_eigen4({covariances[i], covariances[i + 1], covariances[i + 2], covariances[i + 3]}));
+        else
+            for (const Eigen::Matrix3d& c : covariances) benchmark::DoNotOptimize(plane_eigen(c));
+    }
+    state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(covariances.size()));
+    state.SetLabel(lanes ? "four lanes" : "one by one");
+}
+BENCHMARK(BM_PlaneEigen)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The whole TSDF stage: every candidate vertex (reference) vs the seeded fast path.
 void BM_TsdfReference(benchmark::State& state) {

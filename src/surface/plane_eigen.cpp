@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 
+#include "lidarsurf/core/simd.hpp"
+
 namespace lidarsurf {
 
 std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
@@ -92,6 +94,109 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
     if (!(norm2 > 0)) return std::nullopt;
     out.e3 = *best / std::sqrt(norm2);
     return out;
+}
+
+namespace {
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)
+#define LIDARSURF_PLANE_EIGEN_LANES 1
+}  // namespace
+}  // namespace lidarsurf
+#include <immintrin.h>
+namespace lidarsurf {
+namespace {
+// plane_eigen in four lanes (GCC's vector extensions: element-wise IEEE operations, compiled for
+// the Avx2 level, which has no FMA). Every `if` of the scalar code becomes a lane mask: `ok` for
+// the lanes that have not failed a test, `live` for those still taking Newton steps. A comparison
+// gives -1 (all bits) in a true lane, 0 in a false one; a failed lane computes on, harmlessly.
+using Lanes = double __attribute__((vector_size(32)));
+using Mask = long long __attribute__((vector_size(32)));
+
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline Lanes select(Mask m, Lanes a, Lanes b) { return (Lanes)((m & (Mask)a) | (~m & (Mask)b)); }
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline Lanes abs_of(Lanes x) { return (Lanes)((Mask)x & ~(Mask)(Lanes{-0.0, -0.0, -0.0, -0.0})); }
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline Mask finite(Lanes x) { return abs_of(x) < HUGE_VAL; }  // false for NaN
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline Lanes square_root(Lanes x) { return (Lanes)_mm256_sqrt_pd((__m256d)x); }
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline bool any(Mask m) { return _mm256_movemask_pd((__m256d)m) != 0; }
+
+// (x, y, z) replaces (ex, ey, ez) in the lanes where its squared norm is larger than norm2.
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] inline void take_if_larger(Lanes x, Lanes y, Lanes z, Lanes& ex, Lanes& ey, Lanes& ez, Lanes& norm2) {
+    const Lanes n2 = x * x + y * y + z * z;
+    const Mask larger = n2 > norm2;
+    ex = select(larger, x, ex), ey = select(larger, y, ey), ez = select(larger, z, ez), norm2 = select(larger, n2, norm2);
+}
+
+[[gnu::target(LIDARSURF_AVX2_TARGET)]] std::array<std::optional<PlaneEigen>, 4> plane_eigen_lanes(const std::array<Eigen::Matrix3d, 4>& c) {
+    Lanes cxx, cxy, cxz, cyy, cyz, czz;
+    for (int i = 0; i < 4; ++i) {
+        const Eigen::Matrix3d& a = c[static_cast<std::size_t>(i)];
+        cxx[i] = a(0, 0), cxy[i] = a(0, 1), cxz[i] = a(0, 2), cyy[i] = a(1, 1), cyz[i] = a(1, 2), czz[i] = a(2, 2);
+    }
+    // The scalar code's steps, in its order (plane_eigen above).
+    const Lanes t = cxx + cyy + czz;
+    Mask ok = (t > 0) & finite(t);
+    const Lanes shift = t / 3.0;
+    const Lanes xx = cxx - shift, xy = cxy, xz = cxz, yy = cyy - shift, yz = cyz, zz = czz - shift;
+    const Lanes m = xx * yy - xy * xy + xx * zz - xz * xz + yy * zz - yz * yz;
+    const Lanes d = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+    ok &= finite(m + d);
+    Lanes l = -shift - 1e-12 * t;
+    Lanes p = (l * l + m) * l - d;
+    ok &= ~(p > 0);
+    {
+        const Lanes minors = cxx * cyy - cxy * cxy + cxx * czz - cxz * cxz + cyy * czz - cyz * cyz;
+        const Lanes det = cxx * (cyy * czz - cyz * cyz) - cxy * (cxy * czz - cyz * cxz) + cxz * (cxy * cyz - cyy * cxz);
+        const Lanes g = det / minors - shift;
+        const Lanes pg = (g * g + m) * g - d;
+        const Mask closer = (minors > 0) & (det > 0) & (g > l) & (pg <= 0);
+        l = select(closer, g, l);
+        p = select(closer, pg, p);
+    }
+    Lanes last = {HUGE_VAL, HUGE_VAL, HUGE_VAL, HUGE_VAL};
+    Mask live = ok, converged = {0, 0, 0, 0};
+    for (int i = 0; i < 50 && any(live); ++i) {
+        const Lanes dp = 3.0 * l * l + m;
+        const Mask root = live & ~(dp > 0);  // at a multiple root: fails
+        ok &= ~root;
+        live &= ~root;
+        const Lanes step = p / dp, size = abs_of(step);
+        const Mask stop = live & (~(size < last) | (size <= 1e-17 * t));  // converged, step not taken
+        converged |= stop;
+        live &= ~stop;
+        l = select(live, l - step, l);
+        const Mask done = live & (size <= 1e-13 * t);  // converged with this step
+        converged |= done;
+        live &= ~done;
+        last = select(live, size, last);
+        p = select(live, (l * l + m) * l - d, p);
+    }
+    ok &= converged;
+    const Lanes q = -m - 0.75 * l * l;
+    const Lanes r = square_root(select(q < 0.0, Lanes{0, 0, 0, 0}, q));  // std::max(q, 0.0)
+    const Lanes lambda1 = shift - 0.5 * l + r, lambda2 = shift - 0.5 * l - r, lambda3 = shift + l;
+    ok &= lambda2 - lambda3 >= 1e-3 * (lambda1 - lambda3);
+    // e3: the largest of the rows' cross products, first largest in the order c01, c02, c12.
+    const Lanes r0x = xx - l, r0y = xy, r0z = xz, r1x = xy, r1y = yy - l, r1z = yz, r2x = xz, r2y = yz, r2z = zz - l;
+    Lanes ex = r0y * r1z - r0z * r1y, ey = r0z * r1x - r0x * r1z, ez = r0x * r1y - r0y * r1x;
+    Lanes norm2 = ex * ex + ey * ey + ez * ez;
+    take_if_larger(r0y * r2z - r0z * r2y, r0z * r2x - r0x * r2z, r0x * r2y - r0y * r2x, ex, ey, ez, norm2);
+    take_if_larger(r1y * r2z - r1z * r2y, r1z * r2x - r1x * r2z, r1x * r2y - r1y * r2x, ex, ey, ez, norm2);
+    ok &= norm2 > 0;
+    const Lanes norm = square_root(norm2);
+    ex = ex / norm, ey = ey / norm, ez = ez / norm;
+    std::array<std::optional<PlaneEigen>, 4> out;
+    for (int i = 0; i < 4; ++i)
+        if (ok[i]) out[static_cast<std::size_t>(i)] = PlaneEigen{lambda1[i], lambda2[i], lambda3[i], Eigen::Vector3d(ex[i], ey[i], ez[i])};
+    return out;
+}
+#endif
+
+}  // namespace
+
+std::array<std::optional<PlaneEigen>, 4> plane_eigen4(const std::array<Eigen::Matrix3d, 4>& c) {
+#if defined(LIDARSURF_PLANE_EIGEN_LANES)
+    if (simd_level() >= SimdLevel::Avx2) return plane_eigen_lanes(c);
+#endif
+    return {plane_eigen(c[0]), plane_eigen(c[1]), plane_eigen(c[2]), plane_eigen(c[3])};
 }
 
 }  // namespace lidarsurf

@@ -1,6 +1,6 @@
 // plane_eigen against Eigen's iterative solver (the oracle) on random symmetric covariances of
 // the shapes planes meet: flat patches, strips, isotropic discs, lines (refused), scaled over
-// twelve decades; and the matrices it must refuse.
+// twelve decades; and the matrices it must refuse. plane_eigen4 against plane_eigen, bit for bit.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "lidarsurf/surface/plane_eigen.hpp"
+#include "test_util.hpp"
 
 using namespace lidarsurf;
 
@@ -116,6 +117,56 @@ TEST(PlaneEigen, DiscsStripsAndLines) {
     Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
     nan(0, 1) = nan(1, 0) = std::nan("");
     EXPECT_FALSE(plane_eigen(nan));
+}
+
+// plane_eigen4's lanes give plane_eigen's bits at every SIMD level: random covariances over
+// twelve decades (flat, strips, lines, nearly isotropic), grouped four by four with the matrices
+// plane_eigen refuses (zero, not positive semi-definite, NaN, infinite), so that lanes that fail
+// early sit beside lanes that take many Newton steps.
+TEST(PlaneEigen, FourLanesGiveTheScalarBits) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<Eigen::Matrix3d> pool;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const double scale = std::pow(10.0, 12.0 * u(rng) - 6.0);
+        double l[3];
+        for (double& x : l) x = scale * std::pow(10.0, -8.0 * u(rng));
+        std::sort(l, l + 3, std::greater<>());
+        const Eigen::Matrix3d r = random_rotation(rng);
+        pool.push_back(with_eigen(l[0], l[1], l[2], r));
+        pool.push_back(with_eigen(0.04, 0.04 * (1.0 - 1e-3 * u(rng)), 0.04 * (1.0 - 2e-3 * u(rng)), r));  // nearly isotropic
+        pool.push_back(with_eigen(0.04, 0.01 * u(rng), 1e-6 * u(rng), r));                                  // a lidar patch
+    }
+    Eigen::Matrix3d nan = Eigen::Matrix3d::Identity(), inf = Eigen::Matrix3d::Identity();
+    nan(0, 1) = nan(1, 0) = std::nan("");
+    inf(2, 2) = HUGE_VAL;
+    for (const Eigen::Matrix3d& refused : {Eigen::Matrix3d(Eigen::Matrix3d::Zero()), Eigen::Matrix3d(0.3 * Eigen::Matrix3d::Identity()),
+                                           with_eigen(0.04, 0.01, -1e-3, Eigen::Matrix3d::Identity()), nan, inf})
+        for (int i = 0; i < 40; ++i) pool.insert(pool.begin() + static_cast<std::ptrdiff_t>(rng() % pool.size()), refused);
+    pool.resize(pool.size() / 4 * 4);
+    for (SimdLevel level : test::simd_levels()) {
+        test::ScopedSimdLevel scoped(level);
+        int solved = 0, refused = 0;
+        for (std::size_t i = 0; i < pool.size(); i += 4) {
+            const std::array<Eigen::Matrix3d, 4> four{pool[i], pool[i + 1], pool[i + 2], pool[i + 3]};
+            const auto lanes = plane_eigen4(four);
+            for (std::size_t j = 0; j < 4; ++j) {
+                const auto one = plane_eigen(four[j]);
+                ASSERT_EQ(lanes[j].has_value(), one.has_value()) << to_string(level) << " " << i + j;
+                if (!one) {
+                    ++refused;
+                    continue;
+                }
+                ++solved;
+                EXPECT_EQ(lanes[j]->lambda1, one->lambda1) << to_string(level) << " " << i + j;
+                EXPECT_EQ(lanes[j]->lambda2, one->lambda2) << to_string(level) << " " << i + j;
+                EXPECT_EQ(lanes[j]->lambda3, one->lambda3) << to_string(level) << " " << i + j;
+                EXPECT_EQ(lanes[j]->e3, one->e3) << to_string(level) << " " << i + j;
+            }
+        }
+        EXPECT_GT(solved, 4000) << to_string(level);
+        EXPECT_GT(refused, 200) << to_string(level);  // the refused matrices and the lines
+    }
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 // quadratic, e3 the kernel of C - lambda3 I (the cross product of its two most independent rows).
 // Eigen's computeDirect spends most of its time in atan2 and sincos for the same values, and on
 // two more eigenvectors a plane does not need.
+#include <array>
 #include <optional>
 
 #include <Eigen/Core>
@@ -25,5 +26,14 @@ struct PlaneEigen {
 /// (e3 ill-conditioned; Newton slow near the double root), c not positive semi-definite beyond
 /// rounding, c zero or not finite. Callers then use a general solver.
 std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c);
+
+/// plane_eigen of four covariances at once: at the Avx2 level (core/simd.hpp) in the four lanes of
+/// 256-bit registers, each lane's Newton steps running until the last lane converges (the others
+/// keep their values), else as four calls. Lane i is plane_eigen(c[i]) bit for bit: the same
+/// operations in the same order, no fused multiply-add. A fit costs about a third of the scalar
+/// one this way (bench/surface/bench_surface.cpp, BM_PlaneEigen); it is the kernel for fitting
+/// several vertices' planes together, which the vertex evaluation does not do yet
+/// (docs/benchmarks.md, session 22).
+std::array<std::optional<PlaneEigen>, 4> plane_eigen4(const std::array<Eigen::Matrix3d, 4>& c);
 
 }  // namespace lidarsurf
