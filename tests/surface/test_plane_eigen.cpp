@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -28,18 +29,31 @@ Eigen::Matrix3d random_rotation(std::mt19937& rng) {
     return Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
 }
 
+// Eigenvalues spread over 8 decades below the largest, times a scale from 1e-6 to 1e6, sorted
+// (l1 >= l2 >= l3), in a random frame r.
+struct RandomEigen {
+    std::array<double, 3> l;
+    Eigen::Matrix3d r;
+    Eigen::Matrix3d covariance() const { return with_eigen(l[0], l[1], l[2], r); }
+};
+RandomEigen random_eigen(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    RandomEigen e;
+    const double scale = std::pow(10.0, 12.0 * u(rng) - 6.0);
+    for (double& x : e.l) x = scale * std::pow(10.0, -8.0 * u(rng));
+    std::sort(e.l.begin(), e.l.end(), std::greater<>());
+    e.r = random_rotation(rng);
+    return e;
+}
+
 TEST(PlaneEigen, MatchesTheIterativeSolverOnRandomCovariances) {
     std::mt19937 rng(7);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     int solved = 0;
     for (int trial = 0; trial < 20000; ++trial) {
-        // Eigenvalues spread over 8 decades below the largest, times a scale from 1e-6 to 1e6.
-        const double scale = std::pow(10.0, 12.0 * u(rng) - 6.0);
-        double l[3];
-        for (double& x : l) x = scale * std::pow(10.0, -8.0 * u(rng));
-        std::sort(l, l + 3, std::greater<>());
-        const Eigen::Matrix3d r = random_rotation(rng);
-        const Eigen::Matrix3d c = with_eigen(l[0], l[1], l[2], r);
+        const RandomEigen e = random_eigen(rng);
+        const std::array<double, 3>& l = e.l;
+        const Eigen::Matrix3d& r = e.r;
+        const Eigen::Matrix3d c = e.covariance();
         const auto eig = plane_eigen(c);
         const double spread = l[0] - l[2], gap3 = l[1] - l[2];
         // Refused exactly when lambda2 - lambda3 is within 1e-3 of the spread (up to rounding).
@@ -128,12 +142,9 @@ TEST(PlaneEigen, FourLanesGiveTheScalarBits) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<Eigen::Matrix3d> pool;
     for (int trial = 0; trial < 4000; ++trial) {
-        const double scale = std::pow(10.0, 12.0 * u(rng) - 6.0);
-        double l[3];
-        for (double& x : l) x = scale * std::pow(10.0, -8.0 * u(rng));
-        std::sort(l, l + 3, std::greater<>());
-        const Eigen::Matrix3d r = random_rotation(rng);
-        pool.push_back(with_eigen(l[0], l[1], l[2], r));
+        const RandomEigen e = random_eigen(rng);
+        const Eigen::Matrix3d& r = e.r;
+        pool.push_back(e.covariance());
         pool.push_back(with_eigen(0.04, 0.04 * (1.0 - 1e-3 * u(rng)), 0.04 * (1.0 - 2e-3 * u(rng)), r));  // nearly isotropic
         pool.push_back(with_eigen(0.04, 0.01 * u(rng), 1e-6 * u(rng), r));                                  // a lidar patch
     }
