@@ -109,6 +109,10 @@ namespace {
 // the Avx2 level, which has no FMA). Every `if` of the scalar code becomes a lane mask: `ok` for
 // the lanes that have not failed a test, `live` for those still taking Newton steps. A comparison
 // gives -1 (all bits) in a true lane, 0 in a false one; a failed lane computes on, harmlessly.
+// The formulas are plane_eigen's, written again: one template for both (masks as bools for one
+// value) gave the same bits but made the scalar fit, which the evaluation runs, 1-2 % slower end
+// to end (branches became selects; docs/benchmarks.md, session 22). The test
+// PlaneEigen.FourLanesGiveTheScalarBits holds the two to the same bits.
 using Lanes = double __attribute__((vector_size(32)));
 using Mask = long long __attribute__((vector_size(32)));
 
