@@ -11,23 +11,14 @@
 #include <tbb/task_arena.h>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/cube.hpp"
 #include "lidarsurf/core/simd.hpp"
 
 namespace lidarsurf {
 namespace {
 
-// Cube corner c = i + 2j + 4l sits at offset (i, j, l) from the cube's minimum vertex.
-VoxelKey corner_offset(int c) { return {c & 1, (c >> 1) & 1, (c >> 2) & 1}; }
-
-// Corners of each face, counter-clockwise seen from outside the cube (about the outward normal).
-constexpr std::array<std::array<int, 4>, 6> kFaces{{
-    {0, 4, 6, 2},  // -x
-    {1, 3, 7, 5},  // +x
-    {0, 1, 5, 4},  // -y
-    {2, 6, 7, 3},  // +y
-    {0, 2, 3, 1},  // -z
-    {4, 5, 7, 6},  // +z
-}};
+// Cube corner c = i + 2j + 4l sits at offset (i, j, l) from the cube's minimum vertex
+// (core/cube.hpp: corner_offset, and the faces kCubeFaces).
 
 // Axis (0, 1, 2) of the cube edge joining adjacent corners a and b.
 constexpr int edge_axis(int a, int b) { return (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2); }
@@ -52,7 +43,7 @@ struct CubeCase {
 };
 struct CubeTables {
     std::array<std::int8_t, 12> edge_lo{}, edge_hi{};  // the corners joined by edge e (lo < hi)
-    std::array<std::uint8_t, 12> edge_faces{};  // bit f: kFaces[f] contains edge e
+    std::array<std::uint8_t, 12> edge_faces{};  // bit f: kCubeFaces[f] contains edge e
     std::array<std::array<std::int8_t, 4>, 6> face_edges{};  // the edges of face f, in its CCW order
     std::array<CubeCase, 256> cases{};
 };
@@ -61,7 +52,7 @@ const CubeTables& cube_tables() {
         CubeTables t;
         for (int f = 0; f < 6; ++f)
             for (int m = 0; m < 4; ++m) {
-                const int a = kFaces[f][m], b = kFaces[f][(m + 1) % 4], e = edge_index(a, b);
+                const int a = kCubeFaces[f][m], b = kCubeFaces[f][(m + 1) % 4], e = edge_index(a, b);
                 t.edge_lo[e] = static_cast<std::int8_t>(std::min(a, b));
                 t.edge_hi[e] = static_cast<std::int8_t>(std::max(a, b));
                 t.edge_faces[e] |= static_cast<std::uint8_t>(1u << f);
@@ -74,7 +65,7 @@ const CubeTables& cube_tables() {
             for (int f = 0; f < 6; ++f) {
                 int edges[4], n_cross = 0, first_enters = 0;  // crossings in CCW order
                 for (int m = 0; m < 4; ++m) {
-                    const int a = kFaces[f][m], b = kFaces[f][(m + 1) % 4];
+                    const int a = kCubeFaces[f][m], b = kCubeFaces[f][(m + 1) % 4];
                     if (neg(a) == neg(b)) continue;
                     if (n_cross == 0) first_enters = neg(b);  // walking a -> b enters the negative region
                     edges[n_cross++] = t.face_edges[f][m];
@@ -126,7 +117,7 @@ public:
             // A face crossed four times: the asymptotic decider (value of the bilinear interpolant
             // at its saddle point) tells which pairs of crossings the patch boundary joins.
             const int f = std::countr_zero(ambiguous);
-            const auto& q = kFaces[static_cast<std::size_t>(f)];
+            const auto& q = kCubeFaces[static_cast<std::size_t>(f)];
             const double f0 = s[q[0]]->tsdf, f1 = s[q[1]]->tsdf, f2 = s[q[2]]->tsdf, f3 = s[q[3]]->tsdf;
             const double saddle = (f0 * f2 - f1 * f3) / (f0 + f2 - f1 - f3);
             const bool negatives_connected = saddle < 0;

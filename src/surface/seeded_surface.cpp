@@ -23,6 +23,7 @@
 
 #include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/block_mask.hpp"
+#include "lidarsurf/core/cube.hpp"
 #include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
@@ -50,7 +51,7 @@ std::uint64_t morton_code(const VoxelKey& key) {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-VoxelKey corner(const VoxelKey& base, int c) { return base + VoxelKey(c & 1, (c >> 1) & 1, (c >> 2) & 1); }
+VoxelKey corner(const VoxelKey& base, int c) { return base + corner_offset(c); }
 // The corners of a cube whose coordinates are all even / all odd: the base rounded up to even /
 // to odd per axis. Every cube has exactly one of each; they are the lazy evaluation's probes.
 VoxelKey even_corner(const VoxelKey& base) { return {base.x() + (base.x() & 1), base.y() + (base.y() & 1), base.z() + (base.z() & 1)}; }
@@ -77,35 +78,8 @@ void for_each_corner_block(const VoxelKey& cube, F&& f) {
     const VoxelKey block = BlockMap<std::int32_t>::block_of(cube);
     const int last_on = BlockMap<std::int32_t>::last_axes(cube);
     for (int n = 0; n < 8; ++n)
-        if ((n & ~last_on) == 0) f(block + VoxelKey(n & 1, (n >> 1) & 1, n >> 2));
+        if ((n & ~last_on) == 0) f(block + corner_offset(n));
 }
-
-// The 6 faces: corner indices and the direction (axis, sign) to the neighbouring cube.
-struct Face {
-    std::array<int, 4> corners;
-    int axis, sign;
-};
-constexpr std::array<Face, 6> kFaces{{
-    {{0, 2, 4, 6}, 0, -1},
-    {{1, 3, 5, 7}, 0, 1},
-    {{0, 1, 4, 5}, 1, -1},
-    {{2, 3, 6, 7}, 1, 1},
-    {{0, 1, 2, 3}, 2, -1},
-    {{4, 5, 6, 7}, 2, 1},
-}};
-// Bit f set when the surface crosses face f of a cube whose corners' signs are `config` (bit c
-// set when corner c is negative): the face's four corners are not all of one sign. A table, so
-// that classifying a cube tests no face one by one (those tests mispredicted about once a cube).
-constexpr std::array<std::uint8_t, 256> kCrossedFaces = [] {
-    std::array<std::uint8_t, 256> t{};
-    for (int config = 0; config < 256; ++config)
-        for (int f = 0; f < 6; ++f) {
-            int neg = 0;
-            for (int c : kFaces[static_cast<std::size_t>(f)].corners) neg += (config >> c) & 1;
-            if (neg != 0 && neg != 4) t[static_cast<std::size_t>(config)] |= static_cast<std::uint8_t>(1 << f);
-        }
-    return t;
-}();
 
 // The TSDF values of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2)): all the
 // search reads of a sample.
@@ -125,15 +99,15 @@ void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerV
         for (int c = 0; c < 8; ++c) {
             if (!(std::fabs(s[static_cast<std::size_t>(c)]) <= eps)) continue;
             const VoxelKey v = corner(cube, c);
-            for (int n = 0; n < 8; ++n) next(v - VoxelKey(n & 1, (n >> 1) & 1, (n >> 2) & 1));  // the 8 cubes around v
+            for (int n = 0; n < 8; ++n) next(v - corner_offset(n));  // the 8 cubes around v
         }
         return;
     }
     active(cube);
     for (unsigned crossed = kCrossedFaces[config]; crossed; crossed &= crossed - 1) {  // in face order
-        const Face& f = kFaces[static_cast<std::size_t>(std::countr_zero(crossed))];
+        const int f = std::countr_zero(crossed);  // normal to axis f / 2, on the upper side for odd f
         VoxelKey n = cube;
-        n[f.axis] += f.sign;
+        n[f >> 1] += (f & 1) ? 1 : -1;
         next(n);
     }
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/cube.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
@@ -48,14 +49,13 @@ public:
         /// on its block's last layer along some axes, one lookup per block its corners are in.
         bool corners(const VoxelKey& base, std::array<const VertexSample*, 8>& s) {
             using Index = BlockMap<std::int32_t>;
-            auto step = [](int c) { return VoxelKey(c & 1, (c >> 1) & 1, c >> 2); };
             const std::int32_t* slot = index_.find(base);
             if (!slot) return false;
             const int last = Index::last_axes(base);
             if (!last) {
-                // Within the block, corner c's slot is base's plus the block offset of its step.
+                // Within the block, corner c's slot is base's plus the block offset of its corner_offset.
                 for (int c = 0; c < 8; ++c)
-                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + Index::offset_of(step(c))))) return false;
+                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + Index::offset_of(corner_offset(c))))) return false;
                 return true;
             }
             // Corner c lies in the block of base + (c & last), at its own offset there (the
@@ -65,13 +65,13 @@ public:
             const VoxelKey base_block = Index::block_of(base);
             for (int n = 1; n < 8; ++n) {
                 if (n & ~last) continue;
-                const Index::Block* b = field_.index_.find_block(base_block + step(n));
+                const Index::Block* b = field_.index_.find_block(base_block + corner_offset(n));
                 if (!b) return false;  // its corners are undefined
                 block[static_cast<std::size_t>(n)] = b->data();
             }
             for (int c = 0; c < 8; ++c)
                 if (!(s[static_cast<std::size_t>(c)] =
-                          field_.sample_at(block[static_cast<std::size_t>(c & last)] + Index::offset_of(base + step(c)))))
+                          field_.sample_at(block[static_cast<std::size_t>(c & last)] + Index::offset_of(base + corner_offset(c)))))
                     return false;
             return true;
         }
