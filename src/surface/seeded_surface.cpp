@@ -138,14 +138,16 @@ public:
                 for (int y = -dilation; y <= dilation; ++y)
                     for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
     }
+    /// The visited flags, read through an accessor (one per thread: examine()'s `seen`).
+    BlockMap<std::uint8_t>::CornerAccessor visited_reader() const { return BlockMap<std::uint8_t>::CornerAccessor(visited_); }
     /// Examines one cube of a wave through `view` (see run()): its active part goes to `active`,
     /// the cubes it leads to to `next`, less those already visited (most of them: this filter
     /// runs in parallel, so absorb(), which is serial, has fewer cubes to visit).
     template <typename View>
-    void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next) const {
+    void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next,
+                 BlockMap<std::uint8_t>::CornerAccessor& seen) const {
         CornerValues s;
         if (!view.corners(cube, s)) return;  // a corner is undefined: not active, leads nowhere
-        BlockMap<std::uint8_t>::Accessor seen(visited_);
         classify_cube(
             cube, seeding, eps_, s, [&](const VoxelKey& a) { active.push_back(a); },
             [&](const VoxelKey& n) {
@@ -189,8 +191,9 @@ public:
                 // rather than growing one element at a time.
                 actives[c].reserve(chunk);
                 nexts[c].reserve(chunk);
+                BlockMap<std::uint8_t>::CornerAccessor seen(visited_);
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
-                    examine(view, wave_[i], seeding, actives[c], nexts[c]);
+                    examine(view, wave_[i], seeding, actives[c], nexts[c], seen);
             });
             seconds_parallel_ += seconds_since(t1);
             const auto t2 = Clock::now();
@@ -206,7 +209,7 @@ public:
 private:
     // Whether `cube` is visited: a seed (all marked before the seed wave) or a cube of an earlier
     // wave. The flags are written only between the parallel parts (setup, absorb), so this is exact.
-    static bool visited_already(BlockMap<std::uint8_t>::Accessor& seen, const VoxelKey& cube) {
+    static bool visited_already(BlockMap<std::uint8_t>::CornerAccessor& seen, const VoxelKey& cube) {
         const std::uint8_t* flag = seen.find(cube);
         return flag && *flag != 0;
     }
@@ -422,7 +425,7 @@ private:
     }
     static constexpr int kWindows = 4;
     const Shared& s_;
-    Slots::Accessor values_;
+    Slots::CornerAccessor values_;
     StoreRun& run_;
     std::size_t evaluated_ = 0, reused_ = 0;
     std::array<std::optional<NeighbourhoodWindow>, kWindows> windows_;
@@ -557,12 +560,13 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         t0 = Clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
             CornerEvaluator& corners = evaluator();
+            BlockMap<std::uint8_t>::CornerAccessor seen = search.visited_reader();
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 const auto n = static_cast<std::size_t>(popcount(seeds[i].mask));  // as in the later waves
                 active[i].reserve(n);
                 next_cubes[i].reserve(n);
                 for_each_bit(seeds[i].mask, [&](int offset) {
-                    search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i]);
+                    search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i], seen);
                 });
             }
         });

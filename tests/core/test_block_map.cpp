@@ -71,6 +71,45 @@ TEST(BlockMap, MatchesAnOrderedMapOnRandomKeys) {
     }
 }
 
+// CornerAccessor (remembers a block per parity of its coordinates) against the map's own lookup:
+// the corners of cubes around block corners (eight blocks in turn), blocks of the same parity
+// in alternation, absent blocks, and a block created after it found the block absent.
+TEST(BlockMap, CornerAccessorFindsWhatTheMapFinds) {
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> near(-24, 24);
+    BlockMap<int> map(-1);
+    for (int i = 0; i < 3000; ++i) map[VoxelKey(near(rng), near(rng), near(rng))] = i;
+    BlockMap<int>::CornerAccessor reader(map);
+    std::size_t found = 0, absent = 0;
+    for (int i = 0; i < 20000; ++i) {
+        // A cube whose base is near a block corner (multiples of 8), or anywhere, or far off.
+        const VoxelKey base = i % 3 == 0   ? VoxelKey(8 * (near(rng) / 8) - 1, 8 * (near(rng) / 8) - 1, 8 * (near(rng) / 8) - 1)
+                              : i % 3 == 1 ? VoxelKey(near(rng), near(rng), near(rng))
+                                           : VoxelKey(near(rng) + 64, near(rng), near(rng));
+        for (int c = 0; c < 8; ++c) {
+            const VoxelKey k = base + VoxelKey(c & 1, (c >> 1) & 1, c >> 2);
+            const int* expected = map.find(k);
+            ASSERT_EQ(reader.find(k), expected) << k.transpose();
+            (expected ? found : absent) += 1;
+        }
+    }
+    EXPECT_GT(found, 1000u);
+    EXPECT_GT(absent, 1000u);
+    // Two blocks of the same parity in alternation share an entry: still the right ones.
+    map[VoxelKey(0, 0, 0)] = 1;
+    map[VoxelKey(16, 0, 0)] = 2;
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_EQ(*reader.find(VoxelKey(0, 0, 0)), 1);
+        EXPECT_EQ(*reader.find(VoxelKey(16, 0, 0)), 2);
+    }
+    // Absent, then created: found once it exists.
+    const VoxelKey late(200, 200, 200);
+    EXPECT_EQ(reader.find(late), nullptr);
+    map[late] = 5;
+    ASSERT_NE(reader.find(late), nullptr);
+    EXPECT_EQ(*reader.find(late), 5);
+}
+
 TEST(BlockMap, SlotsStayValidWhileBlocksAreAdded) {
     BlockMap<int> map(0);
     int& first = map[{0, 0, 0}];

@@ -187,6 +187,33 @@ public:
         const Block* last_ = nullptr;
     };
 
+    /// Read access that remembers the existing blocks looked up last, one per parity of the block
+    /// coordinates: the up to eight blocks around a block corner, which the corners and the
+    /// neighbours of a cube there fall in, are all remembered at once (the surface search's
+    /// lookups alternate between them; Accessor probes the hash each time the block changes).
+    class CornerAccessor {
+    public:
+        explicit CornerAccessor(const BlockMap& map) : map_(&map) {}
+        const T* find(const VoxelKey& key) {
+            const VoxelKey b = block_of(key);
+            Recent& r = recent_[static_cast<std::size_t>((b.x() & 1) | (b.y() & 1) << 1 | (b.z() & 1) << 2)];
+            if (!r.block || !same_key(b, r.key)) {
+                const Block* found = map_->find_block(b);
+                if (!found) return nullptr;
+                r = {b, found};
+            }
+            return &(*r.block)[static_cast<std::size_t>(offset_of(key))];
+        }
+
+    private:
+        struct Recent {
+            VoxelKey key = VoxelKey::Zero();
+            const Block* block = nullptr;
+        };
+        const BlockMap* map_;
+        std::array<Recent, 8> recent_{};
+    };
+
     /// Write access (creating blocks) that remembers the last block, and the blocks met recently
     /// in a small direct-mapped table (the surface search's cubes alternate between a few
     /// neighbouring blocks: one hash probe each time without it): for one thread.
