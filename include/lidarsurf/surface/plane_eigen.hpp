@@ -31,9 +31,9 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c);
 /// 256-bit registers, each lane's Newton steps running until the last lane converges (the others
 /// keep their values), else as four calls. Lane i is plane_eigen(c[i]) bit for bit: the same
 /// operations in the same order, no fused multiply-add. A fit costs about a third of the scalar
-/// one this way (bench/surface/bench_surface.cpp, BM_PlaneEigen); it is the kernel for fitting
-/// several vertices' planes together, which the vertex evaluation does not do yet
-/// (docs/benchmarks.md, session 22).
+/// one this way in a loop of fits alone (bench/surface/bench_surface.cpp, BM_PlaneEigen). The
+/// vertex evaluation does not use it: fitting four vertices' planes together made a frame slower
+/// (docs/benchmarks.md, session 23), as the one-by-one fits' latency is already overlapped there.
 std::array<std::optional<PlaneEigen>, 4> plane_eigen4(const std::array<Eigen::Matrix3d, 4>& c);
 
 }  // namespace lidarsurf
