@@ -2,8 +2,8 @@
 # Alternated A/B of two lidarsurf binaries (docs/benchmarks.md): on a shared, noisy host only
 # variants measured in the same run, alternated, compare. Each round runs
 #   BINARY bench [SCAN...] --no-reference --no-imls --no-scaling --repeat 7 [ARGS...]
-# for A then B; the table gives, per scan and binary, the median over rounds of each round's
-# median (ms), and B's total relative to A's.
+# for A and B (A first in odd rounds, B first in even ones); the table gives, per scan and
+# binary, the median over rounds of each round's median (ms), and B's total relative to A's.
 #
 # Usage: scripts/ab_bench.sh A_BINARY B_BINARY [ROUNDS] [-- BENCH_ARGS...]
 #   scripts/ab_bench.sh /tmp/lidarsurf_before build/bin/lidarsurf 5
@@ -34,7 +34,12 @@ fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for ((r = 1; r <= rounds; ++r)); do
-    for tag in A B; do
+    # A then B in odd rounds, B then A in even ones: the second run of a round is often slower (or
+    # faster) than the first on this host (session 23: a binary against itself gave 0.91-1.00 with
+    # a fixed order), and alternating the order cancels that bias.
+    order="A B"
+    ((r % 2 == 0)) && order="B A"
+    for tag in $order; do
         bin=$a
         [ $tag = B ] && bin=$b
         # Table rows: scan label (may hold spaces), points, path, thr, read, insert, tsdf, mesh, total, min, ...
@@ -47,7 +52,7 @@ for ((r = 1; r <= rounds; ++r)); do
 done
 echo "A = $a"
 echo "B = $b"
-echo "medians over $rounds alternated rounds of each round's median (ms)"
+echo "medians over $rounds rounds (A first in odd ones, B first in even ones) of each round's median (ms)"
 sort -k2,2 -k1,1 "$out" | awk '
     function median(list,   n, v, i, j, t) {
         n = split(list, v, " ")
