@@ -131,7 +131,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
 // The tool meshes frame after frame (fuse, bench): glibc's defaults give the memory of a frame
 // back to the system when it is freed (blocks above a threshold are mapped and unmapped; the
 // heap's top is trimmed) and fault it in again, zeroed, for the next frame: ~300 page faults per
-// KITTI frame. Blocks below 64 MiB are kept for reuse instead (~25 faults per frame; peak memory
+// KITTI frame. Blocks below 64 MiB are kept for reuse instead (~36 faults per frame; peak memory
 // unchanged, docs/benchmarks.md, session 23). Larger ones (big clouds) are still mapped apart.
 void keep_freed_memory() {
 #if defined(__GLIBC__)

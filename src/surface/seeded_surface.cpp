@@ -191,7 +191,7 @@ public:
                 // rather than growing one element at a time.
                 actives[c].reserve(chunk);
                 nexts[c].reserve(chunk);
-                BlockMap<std::uint8_t>::CornerAccessor seen(visited_);
+                BlockMap<std::uint8_t>::CornerAccessor seen = visited_reader();
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
                     examine(view, wave_[i], seeding, actives[c], nexts[c], seen);
             });
