@@ -81,7 +81,7 @@ void for_each_corner_block(const VoxelKey& cube, F&& f) {
         if ((n & ~last_on) == 0) f(block + corner_offset(n));
 }
 
-// The TSDF values of a cube's corners (corner c = base + (c & 1, c >> 1 & 1, c >> 2)): all the
+// The TSDF values of a cube's corners (corner c = base + corner_offset(c)): all the
 // search reads of a sample.
 using CornerValues = std::array<float, 8>;
 
