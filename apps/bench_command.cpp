@@ -428,12 +428,10 @@ int run_bench(const BenchOptions& o) {
         const double steal = end.total > start.total ? 100.0 * (end.steal - start.steal) / (end.total - start.total) : 0.0;
         char steal_text[64];
         std::snprintf(steal_text, sizeof steal_text, "; CPU time stolen by the hypervisor during the run %.1f %%", steal);
-        // Whether glibc's heaps use transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1,
-        // docs/benchmarks.md, session 23): a percent or two of a frame, so the table says which.
-        const char* tunables = std::getenv("GLIBC_TUNABLES");
-        const bool huge_pages = tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos;
+        // How the allocator was set (core/allocator_tuning.hpp): huge pages are worth a few percent
+        // of a frame (docs/benchmarks.md, session 24), so the table says which.
         const std::string machine = machine_description() + steal_text + "; SIMD " + to_string(simd_level()) +
-                                    (huge_pages ? "; malloc huge pages" : "");
+                                    (o.allocator.empty() ? "" : "; " + o.allocator);
         std::printf("machine: %s\n", machine.c_str());
         std::printf("total = read + insert + tsdf + mesh (IMLS: insert = normals, tsdf = implicit function)\n\n");
         std::fputs(format_rows(rows, true).c_str(), stdout);

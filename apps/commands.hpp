@@ -44,6 +44,7 @@ struct BenchOptions {
     int repeat = 7, slow_repeat = 3, frames = 3;
     bool no_reference = false, no_imls = false, no_scaling = false;
     ReconstructOptions reconstruct;  // the configuration timed (paper defaults)
+    std::string allocator;           // how main() set the allocator (AllocatorTuning::describe())
 };
 CLI::App* add_bench_command(CLI::App& app, BenchOptions& o);
 int run_bench(const BenchOptions& o);

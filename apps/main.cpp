@@ -12,14 +12,12 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 
 #include "lidarsurf/baselines/imls.hpp"
+#include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/eval/holdout.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -128,22 +126,12 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     return 0;
 }
 
-// The tool meshes frame after frame (fuse, bench): glibc's defaults give the memory of a frame
-// back to the system when it is freed (blocks above a threshold are mapped and unmapped; the
-// heap's top is trimmed) and fault it in again, zeroed, for the next frame: ~300 page faults per
-// KITTI frame. Blocks below 64 MiB are kept for reuse instead (~36 faults per frame; peak memory
-// unchanged, docs/benchmarks.md, session 23). Larger ones (big clouds) are still mapped apart.
-void keep_freed_memory() {
-#if defined(__GLIBC__)
-    mallopt(M_MMAP_THRESHOLD, 64 << 20);
-    mallopt(M_TRIM_THRESHOLD, 128 << 20);
-#endif
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-    keep_freed_memory();
+    // Frame after frame (fuse, bench): freed memory kept for reuse, the heap in huge pages
+    // (core/allocator_tuning.hpp).
+    const AllocatorTuning allocator = tune_allocator();
     CLI::App app{"lidarsurf " LIDARSURF_VERSION_STRING " - surface reconstruction from lidar scans (Roldao et al., ITSC 2019)"};
     app.require_subcommand(1);
     app.set_version_flag("--version", LIDARSURF_VERSION_STRING);
@@ -208,7 +196,10 @@ int main(int argc, char** argv) {
         if (*sc) return run_simulate(so);
         if (*rd) return run_render(rdo);
         if (*bm) return run_benchmark(bo);
-        if (*bn) return run_bench(bno);
+        if (*bn) {
+            bno.allocator = allocator.describe();
+            return run_bench(bno);
+        }
         if (*fu) return run_fuse(fo);
     } catch (const Error& e) {
         std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());

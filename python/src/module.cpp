@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "lidarsurf/baselines/imls.hpp"
+#include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -390,6 +391,19 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "set_simd_level", [](const std::string& level) { set_simd_level(simd_level_from_string(level.c_str())); }, py::arg("level"),
         "Use the vector instructions `level` ('sse2', 'avx2', 'avx512') from now on, in every thread: to compare speeds, or to\n"
         "check that a level gives the same mesh. ValueError for a level this build or CPU lacks. Not while a reconstruction runs.");
+    m.def(
+        "tune_allocator",
+        [] {
+            const AllocatorTuning done = tune_allocator();
+            py::dict d;
+            d["keeps_freed_memory"] = done.keeps_freed_memory;
+            d["huge_pages"] = done.huge_pages;
+            return d;
+        },
+        "Set glibc's allocator for meshing frame after frame, as the CLI does: freed blocks below 64 MiB kept for\n"
+        "reuse, and the heap advised for transparent huge pages where the kernel's mode is 'madvise' (a few percent of\n"
+        "a frame; docs/benchmarks.md). Call once, early, before starting threads. Returns what was done as a dict\n"
+        "{'keeps_freed_memory': bool, 'huge_pages': bool}; both False without glibc. Never called by the library itself.");
     m.def(
         "simulate",
         [](const std::string& scene, std::uint64_t seed, bool ground_truth) {

@@ -261,3 +261,20 @@ def test_every_simd_level_gives_the_same_mesh(scan):
         assert np.array_equal(m.normals, meshes[0].normals) and np.array_equal(m.confidence, meshes[0].confidence)
     with pytest.raises(ValueError, match="unknown SIMD level"):
         lidarsurf.set_simd_level("avx1024")
+
+
+def test_tune_allocator_says_what_it_did():
+    done = lidarsurf.tune_allocator()
+    assert set(done) == {"keeps_freed_memory", "huge_pages"}
+    assert all(isinstance(v, bool) for v in done.values())
+    # Huge pages only where the kernel offers them on request (or glibc was told to by GLIBC_TUNABLES).
+    try:
+        with open("/sys/kernel/mm/transparent_hugepage/enabled") as f:
+            mode = f.read()
+        offered = "[madvise]" in mode or "[always]" in mode
+    except OSError:
+        offered = False
+    told = "glibc.malloc.hugetlb=1" in os.environ.get("GLIBC_TUNABLES", "")
+    if done["huge_pages"]:
+        assert done["keeps_freed_memory"] and (offered or told)
+    assert lidarsurf.tune_allocator() == done  # a second call does the same

@@ -1,0 +1,34 @@
+#pragma once
+// The process's memory allocator set for meshing frame after frame (issue 5; measured in
+// docs/benchmarks.md, session 24). A frame allocates and frees some 50 MB: with glibc's defaults
+// that memory goes back to the system after each frame and is faulted in again, zeroed, for the
+// next, in 4 KiB pages whose translations no longer fit the TLB. tune_allocator() keeps freed
+// memory for reuse and, where the kernel offers transparent huge pages on request (its mode
+// "madvise"), backs the heap with 2 MiB pages: what GLIBC_TUNABLES=glibc.malloc.hugetlb=1 does,
+// which a process cannot set for itself once started. The library never calls it: the CLI does,
+// a program embedding the library may (once, early, before its heap has grown).
+#include <string>
+
+namespace lidarsurf {
+
+struct AllocatorTuning {
+    /// Freed blocks below 64 MiB are kept for reuse, the heap's top trimmed only beyond 128 MiB.
+    bool keeps_freed_memory = false;
+    /// The main heap (and its next 256 MiB) is advised for transparent huge pages, by
+    /// tune_allocator() or by glibc itself (GLIBC_TUNABLES=glibc.malloc.hugetlb=1).
+    bool huge_pages = false;
+    /// What was done, in words (for logs and benchmark headers).
+    std::string describe() const;
+};
+
+/// Sets glibc's allocator as above and returns what it did; all false without glibc (nothing is
+/// changed) and huge_pages false when the kernel's THP mode (transparent_huge_pages_mode()) is
+/// "never" or unknown. Calling it again advises the heap grown since. Not thread-safe: call it
+/// before starting threads.
+AllocatorTuning tune_allocator();
+
+/// The kernel's transparent huge page mode: "always", "madvise", "never", or "" when unknown
+/// (not Linux, or /sys not mounted).
+std::string transparent_huge_pages_mode();
+
+}  // namespace lidarsurf

@@ -1,0 +1,108 @@
+#include "lidarsurf/core/allocator_tuning.hpp"
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+using lidarsurf::AllocatorTuning;
+
+// The kernel's view of the mapping that holds `address` (/proc/self/smaps): its name ("[heap]",
+// a file, or empty for an anonymous mapping) and its VmFlags.
+struct Mapping {
+    bool found = false;
+    std::string name, flags;
+};
+Mapping mapping_of(const void* address) {
+    const auto a = reinterpret_cast<std::uintptr_t>(address);
+    std::ifstream in("/proc/self/smaps");
+    Mapping m;
+    bool inside = false;
+    for (std::string line; std::getline(in, line);) {
+        std::uintptr_t lo = 0, hi = 0;
+        char dash = 0;
+        std::istringstream header(line);
+        if (header >> std::hex >> lo >> dash >> hi && dash == '-' && line.find(':') > line.find(' ')) {  // a mapping's first line
+            if (inside) break;
+            inside = lo <= a && a < hi;
+            if (inside) {
+                m.found = true;
+                std::string perms, offset, device, inode;
+                header >> perms >> offset >> device >> inode;
+                std::getline(header >> std::ws, m.name);
+            }
+        } else if (inside && line.rfind("VmFlags:", 0) == 0) {
+            m.flags = line.substr(8) + " ";
+        }
+    }
+    return m;
+}
+
+bool sanitized() {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+    return true;
+#else
+    return false;
+#endif
+}
+
+TEST(AllocatorTuning, TransparentHugePagesModeIsTheBracketedWord) {
+    const std::string mode = lidarsurf::transparent_huge_pages_mode();
+    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string line;
+    if (!in || !std::getline(in, line)) {
+        EXPECT_EQ(mode, "");
+        GTEST_SKIP() << "no /sys/kernel/mm/transparent_hugepage/enabled here";
+    }
+    EXPECT_TRUE(mode == "always" || mode == "madvise" || mode == "never") << mode;
+    EXPECT_NE(line.find("[" + mode + "]"), std::string::npos) << line;
+}
+
+// After tune_allocator(), the kernel must show what it claims: blocks of some MiB come from the
+// heap (glibc's default maps them apart, and unmaps them when freed), and the heap, including its
+// part grown later, is advised for huge pages ("hg" in its VmFlags).
+TEST(AllocatorTuning, TheHeapHoldsLargeBlocksAndIsAdvisedForHugePages) {
+    const AllocatorTuning done = lidarsurf::tune_allocator();
+#if !defined(__GLIBC__) || !defined(__linux__)
+    EXPECT_FALSE(done.keeps_freed_memory);
+    EXPECT_FALSE(done.huge_pages);
+    GTEST_SKIP() << "not glibc on Linux: the allocator is left alone";
+#endif
+    if (sanitized()) {
+        EXPECT_FALSE(done.keeps_freed_memory);
+        EXPECT_FALSE(done.huge_pages);
+        GTEST_SKIP() << "a sanitizer's allocator: left alone";
+    }
+    EXPECT_TRUE(done.keeps_freed_memory);
+    EXPECT_EQ(done.describe().empty(), false);
+    if (std::ifstream("/proc/self/smaps").fail()) GTEST_SKIP() << "no /proc/self/smaps";
+
+    // 16 MiB now, then 40 MiB (beyond any free space the heap had before the call: the padding).
+    for (const std::size_t mib : {16, 40}) {
+        void* block = std::malloc(mib << 20);
+        ASSERT_NE(block, nullptr);
+        std::memset(block, 1, mib << 20);  // so the mapping is the one the block's pages live in
+        const Mapping first = mapping_of(block), last = mapping_of(static_cast<char*>(block) + (mib << 20) - 1);
+        std::free(block);
+        ASSERT_TRUE(first.found && last.found);
+        EXPECT_EQ(first.name, "[heap]") << mib << " MiB";
+        const char* tunables = std::getenv("GLIBC_TUNABLES");
+        const bool glibc_advises = tunables && std::strstr(tunables, "glibc.malloc.hugetlb=1");
+        const std::string mode = lidarsurf::transparent_huge_pages_mode();
+        if (glibc_advises || (mode != "madvise" && mode != "always")) {
+            EXPECT_EQ(done.huge_pages, glibc_advises);
+            continue;
+        }
+        EXPECT_TRUE(done.huge_pages);
+        // The block's last byte lies beyond the heap's first 2 MiB boundary, in the advised part.
+        EXPECT_NE(last.flags.find(" hg "), std::string::npos) << mib << " MiB: VmFlags" << last.flags;
+    }
+}
+
+}  // namespace
