@@ -11,6 +11,8 @@
 #include <memory>
 #include <optional>
 #include <thread>
+#include <tuple>
+#include <utility>
 
 #if defined(__SSE2__) && !defined(LIDARSURF_SCALAR)
 #include <emmintrin.h>
@@ -138,30 +140,41 @@ public:
                 for (int y = -dilation; y <= dilation; ++y)
                     for (int x = -dilation; x <= dilation; ++x) visit(k + VoxelKey(x, y, z), wave_);
     }
-    /// The visited flags, read through an accessor (one per thread: examine()'s `seen`).
+    /// The visited flags, through an accessor (one per thread: examine()'s `seen`).
     BlockMap<std::uint8_t>::CornerAccessor visited_reader() const { return BlockMap<std::uint8_t>::CornerAccessor(visited_); }
     /// Examines one cube of a wave through `view` (see run()): its active part goes to `active`,
-    /// the cubes it leads to to `next`, less those already visited (most of them: this filter
-    /// runs in parallel, so absorb(), which is serial, has fewer cubes to visit).
+    /// the cubes it leads to and nobody visited yet to `next`, each claimed there by setting its
+    /// visited flag (atomically: the threads examine at the same time, and a cube the wave leads
+    /// to twice goes to one `next` only), or to `deferred` when its flag's block does not exist
+    /// yet (blocks are created by absorb(), serially).
     template <typename View>
     void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next,
-                 BlockMap<std::uint8_t>::CornerAccessor& seen) const {
+                 std::vector<VoxelKey>& deferred, BlockMap<std::uint8_t>::CornerAccessor& seen) const {
         CornerValues s;
         if (!view.corners(cube, s)) return;  // a corner is undefined: not active, leads nowhere
         classify_cube(
             cube, seeding, eps_, s, [&](const VoxelKey& a) { active.push_back(a); },
             [&](const VoxelKey& n) {
-                if (!visited_already(seen, n)) next.push_back(n);
+                const std::uint8_t* flag = seen.find(n);
+                if (!flag)
+                    deferred.push_back(n);
+                else if (claim(*flag))
+                    next.push_back(n);
             });
     }
-    /// Appends per-part results in part order: the active cubes, and the cubes they lead to,
-    /// visited into `out` (the serial order, whatever the thread count).
+    /// Appends per-part results in part order: the active cubes, and the cubes they lead to:
+    /// those claimed, then the deferred ones, visited into `out` (creating their blocks).
     void absorb(const std::vector<std::vector<VoxelKey>>& actives, const std::vector<std::vector<VoxelKey>>& nexts,
-                std::vector<VoxelKey>& out) {
+                const std::vector<std::vector<VoxelKey>>& deferred, std::vector<VoxelKey>& out) {
+        std::size_t claimed = 0;
+        for (const auto& n : nexts) claimed += n.size();
+        out.reserve(out.size() + claimed);
         for (std::size_t c = 0; c < actives.size(); ++c) {
             active_.insert(active_.end(), actives[c].begin(), actives[c].end());
-            for (const VoxelKey& n : nexts[c]) visit(n, out);
+            out.insert(out.end(), nexts[c].begin(), nexts[c].end());
         }
+        for (const auto& d : deferred)
+            for (const VoxelKey& n : d) visit(n, out);
     }
     /// Wall time run() spent in the waves' parallel parts, and between them (seconds).
     double seconds_parallel() const { return seconds_parallel_; }
@@ -169,21 +182,23 @@ public:
     /// Runs the waves from wave(). A wave is examined in parallel chunks of `chunk` cubes, each
     /// with its own `make_view()`: `view.corners(cube, s)` sets the samples of the cube's corners
     /// and returns whether they are all defined (false: the cube cannot be active, skip it; `s`
-    /// may then be incomplete). `before_wave(cubes)` runs serially before each wave. The cubes a
-    /// wave leads to are visited in chunk order (the serial order). Returns the active cubes, in
-    /// wave order: which cubes are reached does not depend on the order of the waves, and the
-    /// callers sort them (sort_zyx), which makes the mesh's vertex and triangle order
-    /// deterministic; compute_seeded_tsdf sorts while it assembles the field.
+    /// may then be incomplete). `before_wave(cubes)` runs serially before each wave. Returns the
+    /// active cubes, in wave order. Which cubes a wave leads to does not depend on the timing of
+    /// the threads, but their order in the next wave does (the first thread to claim a cube takes
+    /// it): nothing the search returns depends on that order (the callers sort the active cubes,
+    /// sort_zyx, which makes the mesh's vertex and triangle order deterministic, and
+    /// compute_seeded_tsdf orders the field by block key).
     template <typename MakeView, typename BeforeWave>
     std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave) {
         std::vector<VoxelKey> next;
-        std::vector<std::vector<VoxelKey>> actives, nexts;
+        std::vector<std::vector<VoxelKey>> actives, nexts, deferred;
         while (!wave_.empty()) {
             const auto t0 = Clock::now();
             before_wave(wave_);
             const std::size_t chunks = (wave_.size() + chunk - 1) / chunk;
             actives.assign(chunks, {});
             nexts.assign(chunks, {});
+            deferred.assign(chunks, {});
             const auto t1 = Clock::now();
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
                 auto&& view = make_view();
@@ -193,12 +208,12 @@ public:
                 nexts[c].reserve(chunk);
                 BlockMap<std::uint8_t>::CornerAccessor seen = visited_reader();
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
-                    examine(view, wave_[i], seeding, actives[c], nexts[c], seen);
+                    examine(view, wave_[i], seeding, actives[c], nexts[c], deferred[c], seen);
             });
             seconds_parallel_ += seconds_since(t1);
             const auto t2 = Clock::now();
             next.clear();
-            absorb(actives, nexts, next);
+            absorb(actives, nexts, deferred, next);
             std::swap(wave_, next);
             seeding = false;
             seconds_serial_ += std::chrono::duration<double>(t1 - t0).count() + seconds_since(t2);
@@ -207,11 +222,11 @@ public:
     }
 
 private:
-    // Whether `cube` is visited: a seed (all marked before the seed wave) or a cube of an earlier
-    // wave. The flags are written only between the parallel parts (setup, absorb), so this is exact.
-    static bool visited_already(BlockMap<std::uint8_t>::CornerAccessor& seen, const VoxelKey& cube) {
-        const std::uint8_t* flag = seen.find(cube);
-        return flag && *flag != 0;
+    // Sets a visited flag found unset; whether this call did (false: visited, or claimed by
+    // another thread meanwhile). The flags are only ever set, and only their value is shared.
+    static bool claim(const std::uint8_t& flag) {
+        std::atomic_ref<std::uint8_t> f(const_cast<std::uint8_t&>(flag));  // the accessor reads; the flag's block is the map's
+        return f.load(std::memory_order_relaxed) == 0 && f.exchange(1, std::memory_order_relaxed) == 0;
     }
 
     double eps_;
@@ -529,9 +544,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             for (std::size_t i = 0; i < seeds.size(); ++i) sorted[i] = seeds[order[i].second];
             seeds = std::move(sorted);
         }
-        // Every seed is marked visited before the wave, so that the wave's parallel filter drops
-        // the seeds the cubes lead to (three fifths of the cubes they lead to on a KITTI frame),
-        // which absorb() would otherwise look up one by one only to find them visited. The
+        // Every seed is marked visited before the wave, so that the wave's claims drop the seeds
+        // the cubes lead to (three fifths of the cubes they lead to on a KITTI frame). The
         // blocks of the marks and of the seeds' corners are created serially, then filled with
         // their empty values and marked in parallel (filling 5 MB of new slot blocks was most of
         // the setup on a KITTI frame). The seeds' blocks are distinct: one task per seed.
@@ -555,7 +569,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             }
         });
         lists.reserve(slots.block_count());
-        std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size());
+        std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size()), deferred(seeds.size());
         timing.setup = seconds_since(t0);
         t0 = Clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
@@ -566,13 +580,13 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                 active[i].reserve(n);
                 next_cubes[i].reserve(n);
                 for_each_bit(seeds[i].mask, [&](int offset) {
-                    search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i], seen);
+                    search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i], deferred[i], seen);
                 });
             }
         });
         timing.seed_wave = seconds_since(t0);
         t0 = Clock::now();
-        search.absorb(active, next_cubes, search.wave());
+        search.absorb(active, next_cubes, deferred, search.wave());
         timing.serial = seconds_since(t0);
     }
     // The later waves (about two fifths of a KITTI frame's vertices, ~20 small waves; the
@@ -583,8 +597,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     Slots::WriteAccessor slot_blocks(slots);  // remembers the blocks met recently, from wave to wave
     // Most cubes' corner blocks exist already (nine in ten on a KITTI frame): they are looked for
     // in parallel (reads only), and the cubes with a missing one are then visited serially, in
-    // wave order, to create them; so the blocks are created in the serial pass's order, which
-    // orders the field. Flags per chunk of the wave, then per cube of the chunks with a miss.
+    // wave order, to create them. Flags per chunk of the wave, then per cube of the chunks with a
+    // miss.
     std::vector<std::uint8_t> missing;
     auto before_wave = [&](const std::vector<VoxelKey>& cubes) {
         missing.assign(cubes.size(), 0);
@@ -612,10 +626,11 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     timing.serial += search.seconds_serial();
     t0 = Clock::now();
 
-    // The field: the defined evaluated vertices, ordered by slot (block creation order, then
-    // offset), which does not depend on the thread count. Assembled while another task sorts the
-    // active cubes: the sort is serial (~1 ms on a KITTI frame), and run after the waves it left
-    // one of the two cores idle.
+    // The field: the defined evaluated vertices, ordered by slot (blocks in z, y, x order of their
+    // keys, then offset), which does not depend on the thread count or on the threads' timing
+    // (the blocks' creation order does: it follows the waves' order, run()). Assembled while
+    // another task sorts the active cubes: the sort is serial (~1 ms on a KITTI frame), and run
+    // after the waves it left one of the two cores idle.
     std::vector<VoxelKey> field_keys;
     std::vector<VertexSample> field_samples;
     auto assemble = [&] {
@@ -624,8 +639,15 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
         // KITTI frame) instead of testing every slot again.
         const std::size_t nblocks = slots.block_count();
         constexpr std::size_t kWords = Slots::kVolume / 64;
-        std::vector<std::size_t> block_start(nblocks + 1, 0);
+        std::vector<std::size_t> block_start(nblocks, 0);
         std::vector<std::array<std::uint64_t, kWords>> defined_mask(nblocks);
+        std::vector<std::uint32_t> order(nblocks);  // the blocks by key
+        for (std::size_t b = 0; b < nblocks; ++b) order[b] = static_cast<std::uint32_t>(b);
+        const std::vector<VoxelKey>& block_keys = slots.block_keys();
+        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            const VoxelKey &ka = block_keys[a], &kb = block_keys[b];
+            return std::tie(ka.z(), ka.y(), ka.x()) < std::tie(kb.z(), kb.y(), kb.x());
+        });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {
             for (std::size_t b = r.begin(); b != r.end(); ++b) {
                 const Slots::Block& block = slots.block_at(b);
@@ -635,11 +657,11 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
                     defined_mask[b][w] = bits;
                     count += static_cast<std::size_t>(std::popcount(bits));
                 }
-                block_start[b + 1] = count;
+                block_start[b] = count;
             }
         });
-        for (std::size_t b = 0; b < nblocks; ++b) block_start[b + 1] += block_start[b];
-        const std::size_t defined = block_start[nblocks];
+        std::size_t defined = 0;  // the blocks' counts to their starts, in key order
+        for (const std::uint32_t b : order) defined += std::exchange(block_start[b], defined);
         field_keys.resize(defined);
         field_samples.resize(defined);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks, 16), [&](const auto& r) {

@@ -12,6 +12,7 @@
 
 #include <tbb/task_arena.h>
 
+#include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/sim/analytic_scene.hpp"
@@ -255,6 +256,15 @@ TEST(SeededSurface, TheFieldDoesNotDependOnTheThreadCount) {
     std::set<std::tuple<int, int, int>> distinct;
     for (const VoxelKey& k : first.field.keys()) distinct.insert({k.x(), k.y(), k.z()});
     EXPECT_EQ(distinct.size(), first.field.size());
+    // The order (the waves' order varies with the threads' timing, so the field fixes its own):
+    // blocks by key in z, y, x order, then the offset within the block.
+    using Slots = BlockMap<std::int32_t>;
+    for (std::size_t i = 1; i < first.field.size(); ++i) {
+        const VoxelKey &a = first.field.keys()[i - 1], &b = first.field.keys()[i];
+        const VoxelKey ba = Slots::block_of(a), bb = Slots::block_of(b);
+        const auto block_a = std::make_tuple(ba.z(), ba.y(), ba.x()), block_b = std::make_tuple(bb.z(), bb.y(), bb.x());
+        ASSERT_TRUE(block_a < block_b || (block_a == block_b && Slots::offset_of(a) < Slots::offset_of(b))) << i;
+    }
     for (std::size_t r = 1; r < runs.size(); ++r) {
         EXPECT_EQ(runs[r].evaluated, first.evaluated) << r + 1 << " threads";
         EXPECT_EQ(runs[r].cubes, first.cubes) << r + 1 << " threads";
