@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/point_writer.hpp"
@@ -35,8 +36,11 @@ namespace lidarsurf::cli {
 namespace {
 
 // Peak resident memory of this process since the last reset_peak_rss(), in MiB (Linux VmHWM;
-// writing 5 to clear_refs resets it). -1 when unavailable.
+// writing 5 to clear_refs resets it to the current resident memory). -1 when unavailable. The
+// memory an earlier row freed is given back first (the allocator keeps some for reuse,
+// core/allocator_tuning.hpp), so that a row's peak is its own.
 void reset_peak_rss() {
+    release_free_memory();
     std::ofstream f("/proc/self/clear_refs");
     if (f) f << "5";
 }

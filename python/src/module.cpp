@@ -405,6 +405,18 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "a frame; docs/benchmarks.md). Call once, early, before starting threads. Returns what was done as a dict\n"
         "{'keeps_freed_memory': bool, 'huge_pages': bool}; both False without glibc. Never called by the library itself.");
     m.def(
+        "release_free_memory",
+        [] {
+            const AllocatorTuning done = release_free_memory();
+            py::dict d;
+            d["keeps_freed_memory"] = done.keeps_freed_memory;
+            d["huge_pages"] = done.huge_pages;
+            return d;
+        },
+        "Give the free memory of glibc's heaps back to the system (what tune_allocator keeps for reuse, up to\n"
+        "64 MiB), then tune the allocator again; returns what tune_allocator returns. For a program that has just\n"
+        "freed a lot and wants its resident memory back.");
+    m.def(
         "simulate",
         [](const std::string& scene, std::uint64_t seed, bool ground_truth) {
             if (scene != "demo") throw InvalidArgument("unknown scene '" + scene + "' (available: demo)");

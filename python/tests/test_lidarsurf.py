@@ -278,3 +278,4 @@ def test_tune_allocator_says_what_it_did():
     if done["huge_pages"]:
         assert done["keeps_freed_memory"] and (offered or told)
     assert lidarsurf.tune_allocator() == done  # a second call does the same
+    assert lidarsurf.release_free_memory() == done  # gives memory back, tunes again

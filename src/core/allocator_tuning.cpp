@@ -49,15 +49,16 @@ AllocatorTuning tune_allocator() {
     }
     const std::string mode = transparent_huge_pages_mode();
     if (mode != "madvise" && mode != "always") return done;
-    // The heap grows by 256 MiB of address space at a time (only what is touched is memory), so
-    // the region advised below holds the frames to come: memory the heap gains later lies in a
-    // new mapping without the advice (until the next call).
-    constexpr std::size_t kTopPad = std::size_t{256} << 20;
+    // The heap grows by 64 MiB of address space at a time (only what is touched is memory), so
+    // the region advised below holds a frame to come (a KITTI frame's peak is ~50 MB): memory the
+    // heap gains beyond lies in a new mapping without the advice (until the next call). glibc
+    // also keeps that much free at the heap's top when it trims it.
+    constexpr std::size_t kTopPad = std::size_t{64} << 20;
     mallopt(M_TOP_PAD, static_cast<int>(kTopPad));
-    // Make the heap grow now, by more than its free top (mallinfo2's keepcost) if that is below
-    // the mapping threshold: the growth then brings the padding.
+    // Make the heap grow now, by more than its free top (mallinfo2's keepcost) unless that holds
+    // half the padding already: the growth then brings the padding.
     const std::size_t top = mallinfo2().keepcost;
-    if (top < (std::size_t{32} << 20)) {
+    if (top < kTopPad / 2) {
         // (volatile: a compiler may drop a malloc whose block is only freed)
         void* volatile grow = std::malloc(top + (std::size_t{1} << 20));
         std::free(grow);  // kept: below the trim threshold
@@ -71,6 +72,13 @@ AllocatorTuning tune_allocator() {
     if (arena > 0 && end > start && madvise(reinterpret_cast<void*>(start), end - start, MADV_HUGEPAGE) == 0) done.huge_pages = true;
 #endif
     return done;
+}
+
+AllocatorTuning release_free_memory() {
+#if defined(LIDARSURF_GLIBC_MALLOC)
+    malloc_trim(0);
+#endif
+    return tune_allocator();
 }
 
 }  // namespace lidarsurf

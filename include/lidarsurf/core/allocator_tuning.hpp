@@ -6,7 +6,8 @@
 // memory for reuse and, where the kernel offers transparent huge pages on request (its mode
 // "madvise"), backs the heap with 2 MiB pages: what GLIBC_TUNABLES=glibc.malloc.hugetlb=1 does,
 // which a process cannot set for itself once started. The library never calls it: the CLI does,
-// a program embedding the library may (once, early, before its heap has grown).
+// a program embedding the library may (once, early, before its heap has grown). The price: up to
+// 64 MiB of freed memory stays resident for reuse (release_free_memory() gives it back).
 #include <string>
 
 namespace lidarsurf {
@@ -14,7 +15,7 @@ namespace lidarsurf {
 struct AllocatorTuning {
     /// Freed blocks below 64 MiB are kept for reuse, the heap's top trimmed only beyond 128 MiB.
     bool keeps_freed_memory = false;
-    /// The main heap (and its next 256 MiB) is advised for transparent huge pages, by
+    /// The main heap (and its next 64 MiB) is advised for transparent huge pages, by
     /// tune_allocator() or by glibc itself (GLIBC_TUNABLES=glibc.malloc.hugetlb=1).
     bool huge_pages = false;
     /// What was done, in words (for logs and benchmark headers).
@@ -26,6 +27,12 @@ struct AllocatorTuning {
 /// "never" or unknown. Calling it again advises the heap grown since. Not thread-safe: call it
 /// before starting threads.
 AllocatorTuning tune_allocator();
+
+/// Gives the free memory of glibc's heaps back to the system (malloc_trim), then tunes the
+/// allocator again (the trimmed heap is advised anew): for a program that has just freed a lot
+/// (after a much larger input) and wants its resident memory back to what it uses. `bench` calls
+/// it before each row, so that a row's peak memory is its own. Not thread-safe, as tune_allocator().
+AllocatorTuning release_free_memory();
 
 /// The kernel's transparent huge page mode: "always", "madvise", "never", or "" when unknown
 /// (not Linux, or /sys not mounted).
