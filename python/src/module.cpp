@@ -102,6 +102,14 @@ Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin,
     return rec.extract_mesh();
 }
 
+// What tune_allocator() / release_free_memory() did, as a dict.
+py::dict tuning_dict(const AllocatorTuning& done) {
+    py::dict d;
+    d["keeps_freed_memory"] = done.keeps_freed_memory;
+    d["huge_pages"] = done.huge_pages;
+    return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_lidarsurf, m) {
@@ -393,26 +401,14 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "check that a level gives the same mesh. ValueError for a level this build or CPU lacks. Not while a reconstruction runs.");
     m.def(
         "tune_allocator",
-        [] {
-            const AllocatorTuning done = tune_allocator();
-            py::dict d;
-            d["keeps_freed_memory"] = done.keeps_freed_memory;
-            d["huge_pages"] = done.huge_pages;
-            return d;
-        },
+        [] { return tuning_dict(tune_allocator()); },
         "Set glibc's allocator for meshing frame after frame, as the CLI does: freed blocks below 64 MiB kept for\n"
         "reuse, and the heap advised for transparent huge pages where the kernel's mode is 'madvise' (a few percent of\n"
         "a frame; docs/benchmarks.md). Call once, early, before starting threads. Returns what was done as a dict\n"
         "{'keeps_freed_memory': bool, 'huge_pages': bool}; both False without glibc. Never called by the library itself.");
     m.def(
         "release_free_memory",
-        [] {
-            const AllocatorTuning done = release_free_memory();
-            py::dict d;
-            d["keeps_freed_memory"] = done.keeps_freed_memory;
-            d["huge_pages"] = done.huge_pages;
-            return d;
-        },
+        [] { return tuning_dict(release_free_memory()); },
         "Give the free memory of glibc's heaps back to the system (what tune_allocator keeps for reuse, up to\n"
         "64 MiB), then tune the allocator again; returns what tune_allocator returns. For a program that has just\n"
         "freed a lot and wants its resident memory back.");
