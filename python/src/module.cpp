@@ -404,7 +404,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
         [] { return tuning_dict(tune_allocator()); },
         "Set glibc's allocator for meshing frame after frame, as the CLI does: freed blocks below 64 MiB kept for\n"
         "reuse, and the heap advised for transparent huge pages where the kernel's mode is 'madvise' (a few percent of\n"
-        "a frame; docs/benchmarks.md). Call once, early, before starting threads. Returns what was done as a dict\n"
+        "a frame; docs/benchmarks.md). Call once, early, while no other thread allocates. Returns what was done as a dict\n"
         "{'keeps_freed_memory': bool, 'huge_pages': bool}; both False without glibc. Never called by the library itself.");
     m.def(
         "release_free_memory",

@@ -24,14 +24,14 @@ struct AllocatorTuning {
 
 /// Sets glibc's allocator as above and returns what it did; all false without glibc (nothing is
 /// changed) and huge_pages false when the kernel's THP mode (transparent_huge_pages_mode()) is
-/// "never" or unknown. Calling it again advises the heap grown since. Not thread-safe: call it
-/// before starting threads.
+/// "never" or unknown. Calling it again advises the heap grown since. Call it while no other
+/// thread allocates (at start, or between frames): the heap's bounds are read, then advised.
 AllocatorTuning tune_allocator();
 
 /// Gives the free memory of glibc's heaps back to the system (malloc_trim), then tunes the
 /// allocator again (the trimmed heap is advised anew): for a program that has just freed a lot
 /// (after a much larger input) and wants its resident memory back to what it uses. `bench` calls
-/// it before each row, so that a row's peak memory is its own. Not thread-safe, as tune_allocator().
+/// it before each row, so that a row's peak memory is its own. Same condition as tune_allocator().
 AllocatorTuning release_free_memory();
 
 /// The kernel's transparent huge page mode: "always", "madvise", "never", or "" when unknown
