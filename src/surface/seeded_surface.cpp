@@ -142,39 +142,42 @@ public:
     }
     /// The visited flags, through an accessor (one per thread: examine()'s `seen`).
     BlockMap<std::uint8_t>::CornerAccessor visited_reader() const { return BlockMap<std::uint8_t>::CornerAccessor(visited_); }
-    /// Examines one cube of a wave through `view` (see run()): its active part goes to `active`,
-    /// the cubes it leads to and nobody visited yet to `next`, each claimed there by setting its
-    /// visited flag (atomically: the threads examine at the same time, and a cube the wave leads
-    /// to twice goes to one `next` only), or to `deferred` when its flag's block does not exist
-    /// yet (blocks are created by absorb(), serially).
+    /// What one part of a wave (a chunk of cubes, or a seed block) yields: its active cubes, and
+    /// the cubes they lead to, claimed (`next`) or left to absorb() (`deferred`).
+    struct Part {
+        std::vector<VoxelKey> active, next, deferred;
+    };
+    /// Examines one cube of a wave through `view` (see run()): its active part goes to
+    /// `out.active`, the cubes it leads to and nobody visited yet to `out.next`, each claimed
+    /// there by setting its visited flag (atomically: the threads examine at the same time, and a
+    /// cube the wave leads to twice goes to one `next` only), or to `out.deferred` when its flag's
+    /// block does not exist yet (blocks are created by absorb(), serially).
     template <typename View>
-    void examine(View& view, const VoxelKey& cube, bool seeding, std::vector<VoxelKey>& active, std::vector<VoxelKey>& next,
-                 std::vector<VoxelKey>& deferred, BlockMap<std::uint8_t>::CornerAccessor& seen) const {
+    void examine(View& view, const VoxelKey& cube, bool seeding, Part& out, BlockMap<std::uint8_t>::CornerAccessor& seen) const {
         CornerValues s;
         if (!view.corners(cube, s)) return;  // a corner is undefined: not active, leads nowhere
         classify_cube(
-            cube, seeding, eps_, s, [&](const VoxelKey& a) { active.push_back(a); },
+            cube, seeding, eps_, s, [&](const VoxelKey& a) { out.active.push_back(a); },
             [&](const VoxelKey& n) {
                 const std::uint8_t* flag = seen.find(n);
                 if (!flag)
-                    deferred.push_back(n);
+                    out.deferred.push_back(n);
                 else if (claim(*flag))
-                    next.push_back(n);
+                    out.next.push_back(n);
             });
     }
-    /// Appends per-part results in part order: the active cubes, and the cubes they lead to:
+    /// Appends the parts' results in part order: the active cubes, and the cubes they lead to:
     /// those claimed, then the deferred ones, visited into `out` (creating their blocks).
-    void absorb(const std::vector<std::vector<VoxelKey>>& actives, const std::vector<std::vector<VoxelKey>>& nexts,
-                const std::vector<std::vector<VoxelKey>>& deferred, std::vector<VoxelKey>& out) {
+    void absorb(const std::vector<Part>& parts, std::vector<VoxelKey>& out) {
         std::size_t claimed = 0;
-        for (const auto& n : nexts) claimed += n.size();
+        for (const Part& p : parts) claimed += p.next.size();
         out.reserve(out.size() + claimed);
-        for (std::size_t c = 0; c < actives.size(); ++c) {
-            active_.insert(active_.end(), actives[c].begin(), actives[c].end());
-            out.insert(out.end(), nexts[c].begin(), nexts[c].end());
+        for (const Part& p : parts) {
+            active_.insert(active_.end(), p.active.begin(), p.active.end());
+            out.insert(out.end(), p.next.begin(), p.next.end());
         }
-        for (const auto& d : deferred)
-            for (const VoxelKey& n : d) visit(n, out);
+        for (const Part& p : parts)
+            for (const VoxelKey& n : p.deferred) visit(n, out);
     }
     /// Wall time run() spent in the waves' parallel parts, and between them (seconds).
     double seconds_parallel() const { return seconds_parallel_; }
@@ -191,29 +194,27 @@ public:
     template <typename MakeView, typename BeforeWave>
     std::vector<VoxelKey> run(bool seeding, std::size_t chunk, MakeView&& make_view, BeforeWave&& before_wave) {
         std::vector<VoxelKey> next;
-        std::vector<std::vector<VoxelKey>> actives, nexts, deferred;
+        std::vector<Part> parts;
         while (!wave_.empty()) {
             const auto t0 = Clock::now();
             before_wave(wave_);
             const std::size_t chunks = (wave_.size() + chunk - 1) / chunk;
-            actives.assign(chunks, {});
-            nexts.assign(chunks, {});
-            deferred.assign(chunks, {});
+            parts.assign(chunks, {});
             const auto t1 = Clock::now();
             tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
                 auto&& view = make_view();
                 // About one active cube and one new cube per cube examined: one allocation each
                 // rather than growing one element at a time.
-                actives[c].reserve(chunk);
-                nexts[c].reserve(chunk);
+                parts[c].active.reserve(chunk);
+                parts[c].next.reserve(chunk);
                 BlockMap<std::uint8_t>::CornerAccessor seen = visited_reader();
                 for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
-                    examine(view, wave_[i], seeding, actives[c], nexts[c], deferred[c], seen);
+                    examine(view, wave_[i], seeding, parts[c], seen);
             });
             seconds_parallel_ += seconds_since(t1);
             const auto t2 = Clock::now();
             next.clear();
-            absorb(actives, nexts, deferred, next);
+            absorb(parts, next);
             std::swap(wave_, next);
             seeding = false;
             seconds_serial_ += std::chrono::duration<double>(t1 - t0).count() + seconds_since(t2);
@@ -569,7 +570,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             }
         });
         lists.reserve(slots.block_count());
-        std::vector<std::vector<VoxelKey>> active(seeds.size()), next_cubes(seeds.size()), deferred(seeds.size());
+        std::vector<CubeSearch::Part> parts(seeds.size());
         timing.setup = seconds_since(t0);
         t0 = Clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 4), [&](const auto& r) {
@@ -577,16 +578,15 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
             BlockMap<std::uint8_t>::CornerAccessor seen = search.visited_reader();
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 const auto n = static_cast<std::size_t>(popcount(seeds[i].mask));  // as in the later waves
-                active[i].reserve(n);
-                next_cubes[i].reserve(n);
-                for_each_bit(seeds[i].mask, [&](int offset) {
-                    search.examine(corners, Slots::key_at(seeds[i].block, offset), true, active[i], next_cubes[i], deferred[i], seen);
-                });
+                parts[i].active.reserve(n);
+                parts[i].next.reserve(n);
+                for_each_bit(seeds[i].mask,
+                             [&](int offset) { search.examine(corners, Slots::key_at(seeds[i].block, offset), true, parts[i], seen); });
             }
         });
         timing.seed_wave = seconds_since(t0);
         t0 = Clock::now();
-        search.absorb(active, next_cubes, deferred, search.wave());
+        search.absorb(parts, search.wave());
         timing.serial = seconds_since(t0);
     }
     // The later waves (about two fifths of a KITTI frame's vertices, ~20 small waves; the
