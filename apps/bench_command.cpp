@@ -1,7 +1,8 @@
 // lidarsurf bench: end-to-end speed (read -> voxel statistics -> TSDF -> marching cubes) per stage,
 // as medians over repeated runs, with peak memory, throughput, the ratios to the reference path and
 // to IMLS, and the scaling with input size and threads (issue 5). Without scans it simulates
-// HDL-64 frames of the procedural town.
+// HDL-64 frames of the procedural town (the size scaling: one frame at 4 azimuth resolutions);
+// with scans, the size scaling subsamples the first one (every 4th and every 2nd point).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -137,16 +138,25 @@ struct Row {
     double min_total() const { return *std::min_element(total.begin(), total.end()); }
 };
 
-Row run_row(const fs::path& scan, const std::string& label, Path path, const Method& method, int threads, int repeat) {
+// A scan to time, and how to read it: the scans a user passes are read with the command's format
+// options, the bench's own inputs (simulated frames, the KITTI frames beside the source tree,
+// subsampled copies) as the KITTI .bin files they are.
+struct Input {
+    fs::path path;
+    std::string label;
+    PointReadOptions read;
+};
+
+Row run_row(const Input& in, Path path, const Method& method, int threads, int repeat) {
     Row row;
-    row.scan = label;
+    row.scan = in.label;
     row.path = path_name(path);
     row.threads = threads;
     row.repeat = repeat;
     reset_peak_rss();
     for (int r = 0; r < repeat; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
-        const PointCloud cloud = read_points(scan, method.read);
+        const PointCloud cloud = read_points(in.path, in.read);
         const double read_ms = ms_since(t0);
         double insert = 0, tsdf = 0, mesh_ms = 0;
         Mesh mesh;
@@ -190,8 +200,8 @@ Row run_row(const fs::path& scan, const std::string& label, Path path, const Met
 // "reuse": one Reconstructor for the revolution, whose extractions redo only what the new
 // sector can reach. Times are the sums over the revolution's sectors; the final meshes are
 // compared (they must be the same).
-std::vector<Row> run_sector_rows(const fs::path& scan, const Method& method, int threads, int repeat, int sectors) {
-    const PointCloud cloud = read_points(scan, method.read);
+std::vector<Row> run_sector_rows(const Input& in, const Method& method, int threads, int repeat, int sectors) {
+    const PointCloud cloud = read_points(in.path, in.read);
     std::vector<PointCloud> parts(static_cast<std::size_t>(sectors));
     for (const Eigen::Vector3d& p : cloud.points) {
         const Eigen::Vector3d d = p - method.sensor;
@@ -310,13 +320,17 @@ nlohmann::json to_json(const Row& r) {
     return j;
 }
 
+// The scans of the table (`frames`), and those of the size scaling with the one the
+// thread-scaling and sector rows use (`sizes[mid]`).
+struct Inputs {
+    std::vector<Input> frames, sizes;
+    std::size_t mid = 0;
+};
+
 // Simulated town frames (sensor frame, KITTI .bin) in `dir`: `frames` frames spread over a
 // 100-frame drive, and the middle frame at 4 azimuth resolutions for the size scaling.
-struct SimulatedInputs {
-    std::vector<std::pair<fs::path, std::string>> frames, sizes;
-};
-SimulatedInputs simulate_inputs(const fs::path& dir, int frames) {
-    SimulatedInputs in;
+Inputs simulate_inputs(const fs::path& dir, int frames) {
+    Inputs in;
     sim::SceneConfig scene;  // town, seed 1: the benchmark sequence of docs/benchmarks.md
     const sim::World world = sim::make_world(scene);
     sim::SimulatorConfig sc;
@@ -327,7 +341,7 @@ SimulatedInputs simulate_inputs(const fs::path& dir, int frames) {
         char name[64];
         std::snprintf(name, sizeof name, "town_%03zu.bin", index);
         write_points(simulator.frame(index).scan, dir / name);
-        in.frames.emplace_back(dir / name, std::string("town ") + std::to_string(index));
+        in.frames.push_back({dir / name, std::string("town ") + std::to_string(index), {}});
     }
     // Same scene and beams, azimuth step 0.72 / 0.36 / 0.18 / 0.09 deg: ~30k / 60k / 120k / 240k points.
     for (double step : {0.72, 0.36, 0.18, 0.09}) {
@@ -339,16 +353,33 @@ SimulatedInputs simulate_inputs(const fs::path& dir, int frames) {
         write_points(sized.frame(50).scan, dir / name);
         char label[64];
         std::snprintf(label, sizeof label, "az %.2f deg", step);
-        in.sizes.emplace_back(dir / name, label);
+        in.sizes.push_back({dir / name, label, {}});
     }
+    in.mid = 2;  // 0.18 deg: the HDL-64's ~120k points
     return in;
+}
+
+// The size scaling on the user's scans: every 4th and every 2nd point of the first (KITTI .bin
+// copies in `dir`), then the scan itself, which the thread-scaling and sector rows use.
+void add_subsampled_sizes(Inputs& in, const fs::path& dir) {
+    const Input& scan = in.frames.front();
+    const PointCloud cloud = read_points(scan.path, scan.read);
+    for (const std::size_t step : {4, 2}) {
+        PointCloud part;
+        for (std::size_t i = 0; i < cloud.points.size(); i += step) part.points.push_back(cloud.points[i]);
+        const fs::path path = dir / ("every" + std::to_string(step) + ".bin");
+        write_points(part, path);
+        in.sizes.push_back({path, scan.label + " 1/" + std::to_string(step), {}});
+    }
+    in.sizes.push_back(scan);
+    in.mid = 2;
 }
 
 }  // namespace
 
 CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     CLI::App* b = app.add_subcommand("bench", "End-to-end speed per stage: fast path vs reference vs IMLS, size and thread scaling");
-    b->add_option("scans", o.scans, "Scans to time (default: simulated HDL-64 town frames, and the real KITTI frames of ../shared/data/kitti beside the source tree when present)");
+    b->add_option("scans", o.scans, "Scans to time (default: simulated HDL-64 town frames, and the real KITTI frames of ../shared/data/kitti beside the source tree when present); the size scaling then subsamples the first");
     b->add_option("--repeat", o.repeat, "Runs per row for the fast path (median reported)")->capture_default_str();
     b->add_option("--slow-repeat", o.slow_repeat, "Runs per row for the reference path and IMLS")->capture_default_str();
     b->add_option("--frames", o.frames, "Simulated frames when no scan is given")->capture_default_str();
@@ -369,15 +400,19 @@ int run_bench(const BenchOptions& o) {
     const Method method = resolve_method(o.reconstruct);
     const int threads = method.config.threads;  // 0 = all cores
 
-    std::vector<std::pair<fs::path, std::string>> scans, sizes;
-    fs::path tmp;
     if (o.scans.empty()) {
-        tmp = fs::temp_directory_path() / ("lidarsurf-bench-" + std::to_string(::getpid()));
+        const ReconstructOptions defaults;
+        if (o.reconstruct.format != defaults.format || o.reconstruct.bin_fields != defaults.bin_fields)
+            throw InvalidArgument("--format and --bin-fields describe the scans you pass; without scans, bench reads its own "
+                                  "(simulated town frames and the KITTI frames beside the source tree)");
+    }
+    Inputs in;
+    const fs::path tmp = fs::temp_directory_path() / ("lidarsurf-bench-" + std::to_string(::getpid()));
+    if (o.scans.empty()) {
         fs::create_directories(tmp);
         std::fprintf(stderr, "bench: simulating %d town frames and 4 resolutions in %s\n", o.frames, tmp.c_str());
-        SimulatedInputs in = simulate_inputs(tmp, o.frames);
-        scans = in.frames;
-        sizes = in.sizes;
+        in = simulate_inputs(tmp, o.frames);
+        const std::size_t simulated = in.frames.size();
         // The real KITTI frames beside the source tree (../shared/data/kitti, see its README), when
         // present: the simulated town is an easier scene than a real street (docs/benchmarks.md).
         const fs::path kitti = fs::path(LIDARSURF_SOURCE_DIR) / ".." / "shared" / "data" / "kitti";
@@ -386,39 +421,42 @@ int run_bench(const BenchOptions& o) {
             const std::string name = KittiSequence::frame_name(i);
             const fs::path scan = kitti / (name + ".bin");
             if (!fs::is_regular_file(scan, ec)) break;
-            scans.emplace_back(scan, "kitti " + name);
+            in.frames.push_back({scan, "kitti " + name, {}});
         }
-        if (scans.size() > in.frames.size())
-            std::fprintf(stderr, "bench: and %zu real KITTI frames from %s\n", scans.size() - in.frames.size(), kitti.c_str());
+        if (in.frames.size() > simulated)
+            std::fprintf(stderr, "bench: and %zu real KITTI frames from %s\n", in.frames.size() - simulated, kitti.c_str());
     } else {
         for (const std::string& s : o.scans) {
             if (!fs::is_regular_file(s)) throw IoError("cannot read '" + s + "': not a file");
-            scans.emplace_back(s, fs::path(s).filename().string());
+            in.frames.push_back({s, fs::path(s).filename().string(), method.read});
         }
     }
     auto cleanup = [&] {
         std::error_code ec;
-        if (!tmp.empty()) fs::remove_all(tmp, ec);
+        fs::remove_all(tmp, ec);
     };
     try {
         const CpuTimes start = cpu_times();
         std::vector<Row> rows, size_rows, thread_rows, sector_rows;
         std::string sector_scan;  // the label of the scan the incremental table splits
-        for (const auto& [path, label] : scans) {
-            std::fprintf(stderr, "bench: %s\n", label.c_str());
-            rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
-            if (!o.no_reference) rows.push_back(run_row(path, label, Path::Reference, method, threads, o.slow_repeat));
-            if (!o.no_imls) rows.push_back(run_row(path, label, Path::Imls, method, threads, o.slow_repeat));
+        for (const Input& scan : in.frames) {
+            std::fprintf(stderr, "bench: %s\n", scan.label.c_str());
+            rows.push_back(run_row(scan, Path::Fast, method, threads, o.repeat));
+            if (!o.no_reference) rows.push_back(run_row(scan, Path::Reference, method, threads, o.slow_repeat));
+            if (!o.no_imls) rows.push_back(run_row(scan, Path::Imls, method, threads, o.slow_repeat));
         }
         if (!o.no_scaling) {
-            if (sizes.empty()) sizes.push_back(scans.front());
-            for (const auto& [path, label] : sizes) size_rows.push_back(run_row(path, label, Path::Fast, method, threads, o.repeat));
-            const auto& mid = sizes.size() == 4 ? sizes[2] : sizes.front();
-            for (int t : {1, 2}) thread_rows.push_back(run_row(mid.first, mid.second, Path::Fast, method, t, o.repeat));
+            if (in.sizes.empty()) {  // the user's scans
+                fs::create_directories(tmp);
+                add_subsampled_sizes(in, tmp);
+            }
+            for (const Input& scan : in.sizes) size_rows.push_back(run_row(scan, Path::Fast, method, threads, o.repeat));
+            const Input& mid = in.sizes[in.mid];
+            for (int t : {1, 2}) thread_rows.push_back(run_row(mid, Path::Fast, method, t, o.repeat));
             if (method.config.seeded_surface) {
-                std::fprintf(stderr, "bench: %s in sectors\n", mid.second.c_str());
-                sector_rows = run_sector_rows(mid.first, method, threads, o.slow_repeat, 10);
-                sector_scan = mid.second;
+                std::fprintf(stderr, "bench: %s in sectors\n", mid.label.c_str());
+                sector_rows = run_sector_rows(mid, method, threads, o.slow_repeat, 10);
+                sector_scan = mid.label;
             }
         }
 

@@ -116,6 +116,15 @@ expect 3 "not a PLY|no triangle" -- "$cli" render "$dir/gt.bin" -o "$dir/x.png"
 expect 0 "reference" -- "$cli" bench "$dir/scan.bin" --repeat 2 --slow-repeat 1 --no-imls --no-scaling --json "$dir/bench.json"
 [ "$(grep -c '"path"' "$dir/bench.json")" -eq 2 ] || { echo "FAIL: bench JSON rows"; fail=$((fail + 1)); }
 grep -q '"total_runs_ms"' "$dir/bench.json" || { echo "FAIL: bench JSON lacks run times"; fail=$((fail + 1)); }
+# bench's size scaling on a user's scan: every 4th and every 2nd of its points, then the scan (the
+# counts from the file's size: 16 bytes a KITTI point); on a 5-field (nuScenes) copy read with
+# --bin-fields 5, since the subsampled copies the bench writes are read as its own KITTI files.
+perl -e 'local $/ = \16; while (<STDIN>) { print $_, pack("f", 0) }' <"$dir/scan.bin" >"$dir/scan5.bin"
+n=$(($(stat -c %s "$dir/scan.bin") / 16))
+"$cli" bench "$dir/scan5.bin" --bin-fields 5 --repeat 1 --slow-repeat 1 --no-reference --no-imls >"$dir/sizes.txt" 2>&1
+sizes=$(awk '$1 == "scan5.bin" && ($2 == "1/4" || $2 == "1/2") { printf "%s %s ", $2, $3 }' "$dir/sizes.txt")
+check "bench: size rows of n/4 and n/2 points (n = $n): got '$sizes'" -- [ "$sizes" = "1/4 $(((n + 3) / 4)) 1/2 $(((n + 1) / 2)) " ]
+expect 2 "describe the scans you pass" -- "$cli" bench --bin-fields 5
 expect 2 "repeat" -- "$cli" bench "$dir/scan.bin" --repeat 0
 expect 2 "voxel size" -- "$cli" bench "$dir/scan.bin" --voxel 0
 expect 4 "cannot read" -- "$cli" bench "$dir/missing.bin"
