@@ -116,6 +116,8 @@ expect 3 "not a PLY|no triangle" -- "$cli" render "$dir/gt.bin" -o "$dir/x.png"
 expect 0 "reference" -- "$cli" bench "$dir/scan.bin" --repeat 2 --slow-repeat 1 --no-imls --no-scaling --json "$dir/bench.json"
 [ "$(grep -c '"path"' "$dir/bench.json")" -eq 2 ] || { echo "FAIL: bench JSON rows"; fail=$((fail + 1)); }
 grep -q '"total_runs_ms"' "$dir/bench.json" || { echo "FAIL: bench JSON lacks run times"; fail=$((fail + 1)); }
+# The fast row's untimed first run (its memory faulted in again after the previous row), not the reference's.
+check "bench: one warm-up run, the fast row's" -- [ "$(grep -c '"warmup_total_ms"' "$dir/bench.json")" -eq 1 ]
 # bench's size scaling on a user's scan: every 4th and every 2nd of its points, then the scan (the
 # counts from the file's size: 16 bytes a KITTI point); on a 5-field (nuScenes) copy read with
 # --bin-fields 5, since the subsampled copies the bench writes are read as its own KITTI files.
