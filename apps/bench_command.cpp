@@ -331,12 +331,12 @@ nlohmann::json to_json(const Row& r) {
     return j;
 }
 
-// The scans of the table (`frames`), and those of the size scaling with the one the
-// thread-scaling and sector rows use (`sizes[mid]`).
+// The scans of the table (`frames`) and of the size scaling (`sizes`, smallest first), whose third
+// is a full HDL-64 frame: the one the thread-scaling and sector rows use.
 struct Inputs {
     std::vector<Input> frames, sizes;
-    std::size_t mid = 0;
 };
+constexpr std::size_t kFullSize = 2;
 
 // Simulated town frames (sensor frame, KITTI .bin) in `dir`: `frames` frames spread over a
 // 100-frame drive, and the middle frame at 4 azimuth resolutions for the size scaling.
@@ -366,7 +366,6 @@ Inputs simulate_inputs(const fs::path& dir, int frames) {
         std::snprintf(label, sizeof label, "az %.2f deg", step);
         in.sizes.push_back({dir / name, label, {}});
     }
-    in.mid = 2;  // 0.18 deg: the HDL-64's ~120k points
     return in;
 }
 
@@ -383,7 +382,6 @@ void add_subsampled_sizes(Inputs& in, const fs::path& dir) {
         in.sizes.push_back({path, scan.label + " 1/" + std::to_string(step), {}});
     }
     in.sizes.push_back(scan);
-    in.mid = 2;
 }
 
 }  // namespace
@@ -462,7 +460,7 @@ int run_bench(const BenchOptions& o) {
                 add_subsampled_sizes(in, tmp);
             }
             for (const Input& scan : in.sizes) size_rows.push_back(run_row(scan, Path::Fast, method, threads, o.repeat));
-            const Input& mid = in.sizes[in.mid];
+            const Input& mid = in.sizes[kFullSize];
             for (int t : {1, 2}) thread_rows.push_back(run_row(mid, Path::Fast, method, t, o.repeat));
             if (method.config.seeded_surface) {
                 std::fprintf(stderr, "bench: %s in sectors\n", mid.label.c_str());
