@@ -149,9 +149,10 @@ struct Input {
 };
 
 // Fast-path rows start with one run left out of the statistics: reset_peak_rss() has just given
-// the freed memory back, so a row's first run faults its memory in again (62-96 ms against 46-56
-// for the next runs of a KITTI frame, docs/benchmarks.md session 25), a cost a process pays once,
-// not per frame. The reference path and IMLS (~1 s a run) keep every run.
+// the freed memory back, so a row's first run faults its memory in again (54-96 ms, median 64,
+// against 45-63, median 50, for the next runs of a KITTI frame, docs/benchmarks.md session 25),
+// a cost a process pays once, not per frame. The reference path and IMLS (~1 s a run) keep every
+// run.
 Row run_row(const Input& in, Path path, const Method& method, int threads, int repeat) {
     Row row;
     row.scan = in.label;
