@@ -410,15 +410,13 @@ int run_bench(const BenchOptions& o) {
     const Method method = resolve_method(o.reconstruct);
     const int threads = method.config.threads;  // 0 = all cores
 
+    Inputs in;
+    const fs::path tmp = fs::temp_directory_path() / ("lidarsurf-bench-" + std::to_string(::getpid()));
     if (o.scans.empty()) {
         const ReconstructOptions defaults;
         if (o.reconstruct.format != defaults.format || o.reconstruct.bin_fields != defaults.bin_fields)
             throw InvalidArgument("--format and --bin-fields describe the scans you pass; without scans, bench reads its own "
                                   "(simulated town frames and the KITTI frames beside the source tree)");
-    }
-    Inputs in;
-    const fs::path tmp = fs::temp_directory_path() / ("lidarsurf-bench-" + std::to_string(::getpid()));
-    if (o.scans.empty()) {
         fs::create_directories(tmp);
         std::fprintf(stderr, "bench: simulating %d town frames and 4 resolutions in %s\n", o.frames, tmp.c_str());
         in = simulate_inputs(tmp, o.frames);
