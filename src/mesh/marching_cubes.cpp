@@ -148,6 +148,17 @@ public:
         }
     }
 
+    /// Room for the mesh of `cubes` active cubes (about 1.6 vertices and 2.3 triangles each on
+    /// lidar frames), so that the arrays are not copied as they grow.
+    void reserve(std::size_t cubes) {
+        const std::size_t vertices = cubes * 2, triangles = cubes * 3;
+        mesh_.vertices.reserve(vertices);
+        mesh_.normals.reserve(vertices);
+        mesh_.levels.reserve(vertices);
+        mesh_.confidence.reserve(vertices);
+        mesh_.triangles.reserve(triangles);
+        vertex_ids_.reserve(vertices);
+    }
     Mesh take() { return std::move(mesh_); }
     const Mesh& mesh() const { return mesh_; }
     /// Lattice identity of each mesh vertex, in creation order (axis 4: a loop centroid).
@@ -249,6 +260,7 @@ private:
 // (core/simd.hpp: process_cube inlined, its double arithmetic in VEX encoding, no FMA, so the same
 // mesh).
 void mesh_cubes(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
+    builder.reserve(static_cast<std::size_t>(last - first));
     call_at_simd_level([&] {
         for (const VoxelKey* cube = first; cube != last; ++cube) builder.process_cube(*cube);
     });
