@@ -353,7 +353,10 @@ public:
     /// Whether vertex v is defined, evaluating it if nobody has; its TSDF value in `value` if so.
     bool sample(const VoxelKey& v, float& value) {
         // The block exists and is not const: the accessor only caches it.
-        std::int32_t& slot = *const_cast<std::int32_t*>(values_.find(v));
+        return sample(v, *const_cast<std::int32_t*>(values_.find(v)), value);
+    }
+    /// The same given v's slot.
+    bool sample(const VoxelKey& v, std::int32_t& slot, float& value) {
         // Most calls find the vertex already evaluated (two thirds on a lidar frame): answered
         // inline, the evaluation (with its large stack frame) only when needed.
         const std::int32_t state = std::atomic_ref<std::int32_t>(slot).load(std::memory_order_acquire);
@@ -372,6 +375,18 @@ public:
     bool corners(const VoxelKey& cube, CornerValues& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
+        if (Slots::last_axes(cube) == 0) {
+            // All 8 corners in the cube's block (7 in 8 per axis): one block lookup, and corner c's
+            // slot at a fixed distance from the cube's, its corner_offset's offset in the block.
+            std::int32_t* slot = const_cast<std::int32_t*>(values_.find(cube));
+            auto at = [&](int c) -> bool {
+                return sample(corner(cube, c), slot[Slots::offset_of(corner_offset(c))], s[static_cast<std::size_t>(c)]);
+            };
+            if (!at(even) || !at(7 ^ even)) return false;
+            for (int c = 0; c < 8; ++c)
+                if (c != even && c != (7 ^ even) && !at(c)) return false;
+            return true;
+        }
         if (!sample(even_corner(cube), s[static_cast<std::size_t>(even)]) || !sample(odd_corner(cube), s[static_cast<std::size_t>(7 ^ even)]))
             return false;
         for (int c = 0; c < 8; ++c)
