@@ -54,10 +54,6 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 VoxelKey corner(const VoxelKey& base, int c) { return base + corner_offset(c); }
-// The corners of a cube whose coordinates are all even / all odd: the base rounded up to even /
-// to odd per axis. Every cube has exactly one of each; they are the lazy evaluation's probes.
-VoxelKey even_corner(const VoxelKey& base) { return {base.x() + (base.x() & 1), base.y() + (base.y() & 1), base.z() + (base.z() & 1)}; }
-VoxelKey odd_corner(const VoxelKey& base) { return {base.x() + 1 - (base.x() & 1), base.y() + 1 - (base.y() & 1), base.z() + 1 - (base.z() & 1)}; }
 
 // Calls f(b) for each vertex block b that holds a corner of a cube whose base is in block
 // `block` at one of the offsets of `bases`: the block itself, and its neighbour +1 along each set
@@ -375,23 +371,20 @@ public:
     bool corners(const VoxelKey& cube, CornerValues& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
-        if (Slots::last_axes(cube) == 0) {
-            // All 8 corners in the cube's block (7 in 8 per axis): one block lookup, and corner c's
-            // slot at a fixed distance from the cube's, its corner_offset's offset in the block.
-            std::int32_t* slot = const_cast<std::int32_t*>(values_.find(cube));
-            auto at = [&](int c) -> bool {
-                return sample(corner(cube, c), slot[Slots::offset_of(corner_offset(c))], s[static_cast<std::size_t>(c)]);
-            };
+        // The lazy order, given how corner c's sample is obtained (`at(c)`, false if undefined).
+        auto lazily = [&](auto&& at) {
             if (!at(even) || !at(7 ^ even)) return false;
             for (int c = 0; c < 8; ++c)
                 if (c != even && c != (7 ^ even) && !at(c)) return false;
             return true;
+        };
+        if (Slots::last_axes(cube) == 0) {
+            // All 8 corners in the cube's block (7 in 8 per axis): one block lookup, and corner c's
+            // slot at a fixed distance from the cube's, its corner_offset's offset in the block.
+            std::int32_t* slot = const_cast<std::int32_t*>(values_.find(cube));
+            return lazily([&](int c) { return sample(corner(cube, c), slot[Slots::offset_of(corner_offset(c))], s[static_cast<std::size_t>(c)]); });
         }
-        if (!sample(even_corner(cube), s[static_cast<std::size_t>(even)]) || !sample(odd_corner(cube), s[static_cast<std::size_t>(7 ^ even)]))
-            return false;
-        for (int c = 0; c < 8; ++c)
-            if (c != even && c != (7 ^ even) && !sample(corner(cube, c), s[static_cast<std::size_t>(c)])) return false;
-        return true;
+        return lazily([&](int c) { return sample(corner(cube, c), s[static_cast<std::size_t>(c)]); });
     }
 
 private:
