@@ -379,10 +379,9 @@ public:
             return true;
         };
         if (Slots::last_axes(cube) == 0) {
-            // All 8 corners in the cube's block (7 in 8 per axis): one block lookup, and corner c's
-            // slot at a fixed distance from the cube's, its corner_offset's offset in the block.
+            // All 8 corners in the cube's block (7 in 8 per axis): one block lookup.
             std::int32_t* slot = const_cast<std::int32_t*>(values_.find(cube));
-            return lazily([&](int c) { return sample(corner(cube, c), slot[Slots::offset_of(corner_offset(c))], s[static_cast<std::size_t>(c)]); });
+            return lazily([&](int c) { return sample(corner(cube, c), slot[Slots::corner_step(c)], s[static_cast<std::size_t>(c)]); });
         }
         return lazily([&](int c) { return sample(corner(cube, c), s[static_cast<std::size_t>(c)]); });
     }

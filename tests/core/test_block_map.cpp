@@ -110,6 +110,27 @@ TEST(BlockMap, CornerAccessorFindsWhatTheMapFinds) {
     EXPECT_EQ(*reader.find(late), 5);
 }
 
+TEST(BlockMap, CornerStepIsTheSlotDistanceToACornerInTheSameBlock) {
+    // Every cube base of a block (negative block included) whose corners share its block: corner
+    // c's slot is the base's plus corner_step(c), as the map itself finds them.
+    BlockMap<int> map(-1);
+    for (const VoxelKey& block : {VoxelKey(0, 0, 0), VoxelKey(-2, 1, -1)}) {
+        int value = 0;
+        for (int z = 0; z < 8; ++z)
+            for (int y = 0; y < 8; ++y)
+                for (int x = 0; x < 8; ++x) map[block * 8 + VoxelKey(x, y, z)] = value++;
+        for (int z = 0; z < 7; ++z)
+            for (int y = 0; y < 7; ++y)
+                for (int x = 0; x < 7; ++x) {
+                    const VoxelKey base = block * 8 + VoxelKey(x, y, z);
+                    ASSERT_EQ(BlockMap<int>::last_axes(base), 0);
+                    const int* slot = map.find(base);
+                    for (int c = 0; c < 8; ++c)
+                        EXPECT_EQ(slot + BlockMap<int>::corner_step(c), map.find(base + VoxelKey(c & 1, (c >> 1) & 1, c >> 2))) << c;
+                }
+    }
+}
+
 TEST(BlockMap, SlotsStayValidWhileBlocksAreAdded) {
     BlockMap<int> map(0);
     int& first = map[{0, 0, 0}];

@@ -97,6 +97,9 @@ public:
         constexpr int m = kSize - 1;
         return ((key.x() & m) == m) | ((key.y() & m) == m) << 1 | ((key.z() & m) == m) << 2;
     }
+    /// Slots from a cube's minimum corner `base` to its corner c (offset (c & 1, c >> 1 & 1, c >> 2),
+    /// core/cube.hpp's corner_offset) when the cube's corners share its block (last_axes(base) == 0).
+    static int corner_step(int c) { return (c & 1) | ((c >> 1) & 1) << kBits | (c >> 2) << (2 * kBits); }
     /// The key at `offset` of block `block` (inverse of block_of/offset_of).
     static VoxelKey key_at(const VoxelKey& block, int offset) {
         constexpr int m = kSize - 1;

@@ -53,9 +53,8 @@ public:
             if (!slot) return false;
             const int last = Index::last_axes(base);
             if (!last) {
-                // Within the block, corner c's slot is base's plus the block offset of its corner_offset.
                 for (int c = 0; c < 8; ++c)
-                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + Index::offset_of(corner_offset(c))))) return false;
+                    if (!(s[static_cast<std::size_t>(c)] = field_.sample_at(slot + Index::corner_step(c)))) return false;
                 return true;
             }
             // Corner c lies in the block of base + (c & last), at its own offset there (the
