@@ -210,6 +210,44 @@ TEST(PackedVoxels, EveryVoxelIsFoundByRankWithItsStatistics) {
     for (int i = 0; i < 256; ++i) EXPECT_EQ(PackedVoxels::kBitCount[static_cast<std::size_t>(i)], std::bitset<8>(static_cast<unsigned>(i)).count());
 }
 
+// find() of the dense table (a compact frame) and of the hash fallback (two clusters far apart)
+// against the grid's hash index (the oracle), on every block key of the blocks' box and a margin
+// around it: the same block (its occupancy words) or nullptr.
+TEST(PackedVoxels, FindsEveryBlockKeyAsTheGridsIndexWithOrWithoutTheDenseTable) {
+    std::mt19937 rng(13);
+    std::normal_distribution<double> g(0.0, 3.0);
+    for (const bool far_cluster : {false, true}) {
+        VoxelGrid grid(0.2);
+        for (int i = 0; i < 20000; ++i) grid.insert(Eigen::Vector3d(g(rng), g(rng), -1.0 + 0.3 * g(rng)));
+        if (far_cluster)  // 10 km away: the box would hold millions of cells per block
+            for (int i = 0; i < 100; ++i) grid.insert(Eigen::Vector3d(1e4 + g(rng), -1e4 + g(rng), 0.3 * g(rng)));
+        const PackedVoxels packed(grid);
+        EXPECT_EQ(packed.dense(), !far_cluster);
+        // The near cluster's blocks' box (blocks are 1.6 m: the far ones have |x| > 6000).
+        std::size_t near = 0;
+        VoxelKey lo = VoxelKey::Constant(1 << 20), hi = VoxelKey::Constant(-(1 << 20));
+        for (const VoxelKey& k : grid.index().block_keys())
+            if (std::abs(k.x()) < 1000) lo = lo.cwiseMin(k), hi = hi.cwiseMax(k), ++near;
+        std::size_t found = 0;
+        for (int z = lo.z() - 2; z <= hi.z() + 2; ++z)
+            for (int y = lo.y() - 2; y <= hi.y() + 2; ++y)
+                for (int x = lo.x() - 2; x <= hi.x() + 2; ++x) {
+                    const VoxelKey key(x, y, z);
+                    const std::int64_t b = grid.index().index_of(key);
+                    const PackedVoxels::Block* block = packed.find(key);
+                    if (b < 0) {
+                        ASSERT_EQ(block, nullptr) << x << " " << y << " " << z;
+                    } else {
+                        ASSERT_NE(block, nullptr) << x << " " << y << " " << z;
+                        ASSERT_EQ(block->occupancy, &grid.occupancy(static_cast<std::size_t>(b)));
+                        ++found;
+                    }
+                }
+        EXPECT_EQ(found, near);  // every near block was found
+        EXPECT_EQ(packed.find(VoxelKey(kMaxLatticeIndex >> 3, -(kMaxLatticeIndex >> 3), 0)), nullptr);
+    }
+}
+
 // A snapshot with some blocks packed up front: the others are packed when first found, with
 // the same records as the full snapshot's, also when two threads find them at once; absent
 // blocks stay nullptr.
