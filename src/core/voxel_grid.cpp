@@ -45,24 +45,26 @@ void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
     origin_set_ = true;
 }
 
+void VoxelGrid::cache_block(const VoxelKey& block_key) {
+    const std::uint32_t b = index_.block_index(block_key);
+    if (b >= occupancy_.size()) {
+        occupancy_.resize(b + 1, Occupancy{});
+        touched_flag_.resize(b + 1, 0);
+    }
+    // Every point goes through here or through the cached block, which was marked when it was
+    // cached (clear_touched() drops the cache).
+    if (!touched_flag_[b]) {
+        touched_flag_[b] = 1;
+        touched_.push_back(b);
+    }
+    last_block_ = &index_.block_at(b);
+    last_occupancy_ = &occupancy_[b];
+    last_block_key_ = block_key;
+}
+
 std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
     const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
-    if (!last_block_ || !same_key(block_key, last_block_key_)) {
-        const std::uint32_t b = index_.block_index(block_key);
-        if (b >= occupancy_.size()) {
-            occupancy_.resize(b + 1, Occupancy{});
-            touched_flag_.resize(b + 1, 0);
-        }
-        // Every point goes through here or through the cached block below, which was marked when
-        // it was cached (clear_touched() drops the cache).
-        if (!touched_flag_[b]) {
-            touched_flag_[b] = 1;
-            touched_.push_back(b);
-        }
-        last_block_ = &index_.block_at(b);
-        last_occupancy_ = &occupancy_[b];
-        last_block_key_ = block_key;
-    }
+    if (!last_block_ || !same_key(block_key, last_block_key_)) cache_block(block_key);
     const int offset = BlockMap<std::int32_t>::offset_of(key);
     std::int32_t& slot = (*last_block_)[static_cast<std::size_t>(offset)];
     if (slot < 0) {
@@ -106,14 +108,33 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
                       [&](const auto& r) { call_at_simd_level(key_range, r.begin(), r.end()); });
     // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).
+    //    Without a branch on whether the voxel is new (as likely as not on a lidar frame, so
+    //    mispredicted half the time): each point's key is written at the end of keys_, which
+    //    keeps it only if the voxel was new, and its occupancy bit is set either way.
     std::vector<std::uint32_t> voxel(n, kSkip);
     std::size_t dropped = 0;
+    std::size_t count = keys_.size();
+    keys_.resize(count + n);  // room for every point's voxel being new; cut to `count` below
+    VoxelKey* const numbered = keys_.data();
     for (std::size_t i = 0; i < n; ++i) {
-        if (finite[i])
-            voxel[i] = static_cast<std::uint32_t>(voxel_index(keys[i]));
-        else
+        if (!finite[i]) [[unlikely]] {
             ++dropped;
+            continue;
+        }
+        const VoxelKey& key = keys[i];
+        const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
+        if (!last_block_ || !same_key(block_key, last_block_key_)) cache_block(block_key);
+        const int offset = BlockMap<std::int32_t>::offset_of(key);
+        std::int32_t& slot = (*last_block_)[static_cast<std::size_t>(offset)];
+        const std::int32_t old = slot;
+        const std::int32_t index = old < 0 ? static_cast<std::int32_t>(count) : old;
+        slot = index;
+        numbered[count] = key;
+        count += old < 0;
+        (*last_occupancy_)[static_cast<std::size_t>(offset >> 6)] |= std::uint64_t{1} << (offset & 63);
+        voxel[i] = static_cast<std::uint32_t>(index);
     }
+    keys_.resize(count);
     stats_.resize(keys_.size());  // the new voxels, empty
     // 3. The points of each voxel, in point order, then Welford's update per voxel in parallel:
     //    each voxel sees its points in the order one-by-one insertion gives it, so the statistics

@@ -121,6 +121,8 @@ private:
         return voxel_index_slow(key);
     }
     std::int32_t voxel_index_slow(const VoxelKey& key);
+    // Makes block `block_key` (created if absent, marked touched) the cached last block.
+    void cache_block(const VoxelKey& block_key);
 
     double alpha_;
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
