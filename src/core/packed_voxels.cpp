@@ -32,9 +32,11 @@ PackedVoxels::PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t
 
 void PackedVoxels::build_dense_table() {
     // The windows of a frame look blocks up ~150k times (KITTI 000000), mostly blocks near the
-    // data; a lidar frame's blocks fill a few percent of their bounding box (a flat disc a few
-    // blocks thick), so a table of the box costs a few bytes per block and answers with one load
-    // instead of a hash probe (which misses to an empty slot for the many absent blocks).
+    // data. A lidar frame's blocks fill 3-5 % of their bounding box (a disc ten blocks thick:
+    // 2,283 blocks in a 98 x 64 x 10 box on KITTI 000000, 1,221 in 146 x 47 x 4 on the simulated
+    // town), so a table of the box costs ~110 bytes per block (250 KB there) and answers with one
+    // load instead of a hash probe (which runs on to an empty slot for the many absent blocks).
+    // A box sparser than kDenseCellsPerBlock (a fused map along a long trajectory) keeps the hash.
     const std::vector<VoxelKey>& keys = grid_->index().block_keys();
     if (keys.empty()) return;
     VoxelKey lo = keys.front(), hi = keys.front();

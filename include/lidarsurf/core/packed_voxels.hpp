@@ -78,7 +78,7 @@ public:
     /// Whether find() reads a dense table of the blocks' bounding box instead of probing the
     /// grid's hash index (built when the box holds at most kDenseCellsPerBlock cells per block).
     bool dense() const { return !dense_.empty(); }
-    static constexpr std::size_t kDenseCellsPerBlock = 16;
+    static constexpr std::size_t kDenseCellsPerBlock = 64;
 
 private:
     static constexpr std::uint8_t kUnpacked = 0, kBusy = 1, kPacked = 2;
