@@ -116,6 +116,8 @@ public:
     explicit CubeSearch(const VoxelGrid& grid) : eps_(1e-6 * grid.voxel_size()), seen_of_(visited_) {
         visited_.reserve_blocks(grid.index().block_count() * 2);
     }
+    /// How many cubes ahead of the one it examines a wave's chunk asks its view to prefetch.
+    static constexpr std::size_t kPrefetchAhead = 2;
     double eps() const { return eps_; }
     BlockMap<std::uint8_t>& visited() { return visited_; }
     std::vector<VoxelKey>& wave() { return wave_; }
@@ -204,8 +206,12 @@ public:
                 parts[c].active.reserve(chunk);
                 parts[c].next.reserve(chunk);
                 BlockMap<std::uint8_t>::CornerAccessor seen = visited_reader();
-                for (std::size_t i = c * chunk; i < std::min(wave_.size(), (c + 1) * chunk); ++i)
+                const std::size_t end = std::min(wave_.size(), (c + 1) * chunk);
+                for (std::size_t i = c * chunk; i < end; ++i) {
+                    if constexpr (requires { view.prefetch(wave_[i]); })
+                        if (i + kPrefetchAhead < end) view.prefetch(wave_[i + kPrefetchAhead]);
                     examine(view, wave_[i], seeding, parts[c], seen);
+                }
             });
             seconds_parallel_ += seconds_since(t1);
             const auto t2 = Clock::now();
@@ -335,7 +341,7 @@ public:
         tbb::enumerable_thread_specific<StoreRun>& runs;  ///< each thread's claimed part of `defined`
         BlockLists& lists;                    ///< the windows' shared voxel list, by slot block
     };
-    explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots), run_(shared.runs.local()) {
+    explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots), ahead_(shared.slots), run_(shared.runs.local()) {
         if (shared.previous) previous_.emplace(*shared.previous);
     }
     CornerEvaluator(const CornerEvaluator&) = delete;
@@ -368,6 +374,19 @@ public:
     /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
     /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
     /// only on their values, so the set of evaluated vertices does not depend on the order.
+    /// Asks for the cache lines of `cube`'s corner slots, which corners() will read (a cube of a
+    /// later wave is rarely next to the one before it, and its slots then miss the caches).
+    void prefetch(const VoxelKey& cube) {
+        const std::int32_t* slot = ahead_.find(cube);
+        if (!slot) return;
+        // The corners lie on rows y, y + 1 of layers z, z + 1 (corner_step): where the cube's
+        // corners leave its block, the lines of the next block are not asked for.
+        if (Slots::last_axes(cube) != 0) {
+            __builtin_prefetch(slot);
+            return;
+        }
+        for (int c : {0, 2, 4, 6}) __builtin_prefetch(slot + Slots::corner_step(c));
+    }
     bool corners(const VoxelKey& cube, CornerValues& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);
@@ -449,6 +468,7 @@ private:
     static constexpr int kWindows = 4;
     const Shared& s_;
     Slots::CornerAccessor values_;
+    Slots::CornerAccessor ahead_;  // prefetch()'s own, so that it does not displace values_'s blocks
     StoreRun& run_;
     std::size_t evaluated_ = 0, reused_ = 0;
     std::array<std::optional<NeighbourhoodWindow>, kWindows> windows_;
