@@ -38,24 +38,10 @@ void PackedVoxels::build_dense_table() {
     // load instead of a hash probe (which runs on to an empty slot for the many absent blocks).
     // A box sparser than kDenseCellsPerBlock (a fused map along a long trajectory) keeps the hash.
     const std::vector<VoxelKey>& keys = grid_->index().block_keys();
-    if (keys.empty()) return;
-    VoxelKey lo = keys.front(), hi = keys.front();
-    for (const VoxelKey& k : keys) {
-        lo = lo.cwiseMin(k);
-        hi = hi.cwiseMax(k);
-    }
-    // In 64 bits: the box of far-apart keys overflows int.
-    const std::int64_t sx = std::int64_t{hi.x()} - lo.x() + 1, sy = std::int64_t{hi.y()} - lo.y() + 1, sz = std::int64_t{hi.z()} - lo.z() + 1;
-    const auto limit = static_cast<std::int64_t>(kDenseCellsPerBlock * keys.size());
-    if (sx > limit || sy > limit || sz > limit || sx * sy > limit || sx * sy * sz > limit) return;
-    dense_min_ = lo;
-    dense_size_ = VoxelKey(static_cast<int>(sx), static_cast<int>(sy), static_cast<int>(sz));
-    dense_.assign(static_cast<std::size_t>(sx * sy * sz), -1);
-    for (std::size_t b = 0; b < keys.size(); ++b) {
-        const VoxelKey d = keys[b] - lo;
-        dense_[static_cast<std::size_t>(d.x()) + static_cast<std::size_t>(sx) * (static_cast<std::size_t>(d.y()) + static_cast<std::size_t>(sy) * static_cast<std::size_t>(d.z()))] =
-            static_cast<std::int32_t>(b);
-    }
+    const std::optional<BlockBox> box = dense_block_box(keys, 0, kDenseCellsPerBlock);
+    if (!box) return;
+    dense_.use_box(*box);
+    for (std::size_t b = 0; b < keys.size(); ++b) dense_.try_emplace(keys[b], static_cast<std::uint32_t>(b));
 }
 
 void PackedVoxels::pack(std::size_t b) const {

@@ -21,10 +21,16 @@ using Tuple = std::tuple<int, int, int>;
 Tuple tuple_of(const VoxelKey& k) { return {k.x(), k.y(), k.z()}; }
 }  // namespace
 
-TEST(BlockMap, MatchesAnOrderedMapOnRandomKeys) {
+// Without a box, and with a dense box holding part of the near blocks (-5..5 per axis), the
+// rest and the far blocks in the hash.
+class BlockMapBoxed : public ::testing::TestWithParam<bool> {};
+INSTANTIATE_TEST_SUITE_P(WithAndWithoutABox, BlockMapBoxed, ::testing::Bool());
+
+TEST_P(BlockMapBoxed, MatchesAnOrderedMapOnRandomKeys) {
     std::mt19937 rng(7);
     std::uniform_int_distribution<int> near(-40, 40), far(-kMaxLatticeIndex, kMaxLatticeIndex);
     BlockMap<int> map(-1);
+    if (GetParam()) map.use_box({VoxelKey(-5, -4, -3), VoxelKey(8, 11, 6)});
     std::map<Tuple, int> oracle;
     BlockMap<int>::WriteAccessor writer(map);
     for (int i = 0; i < 20000; ++i) {
@@ -69,6 +75,49 @@ TEST(BlockMap, MatchesAnOrderedMapOnRandomKeys) {
             EXPECT_EQ(BlockMap<int>::last_axes(k), next_block_axes);
         }
     }
+}
+
+// BlockIndex's dense box against a std::map (the oracle), keys in and around the box; the box
+// only on an empty index; dense_block_box against the keys' extent.
+TEST(BlockIndex, ABoxHoldsItsKeysAndTheHashTheOthers) {
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> coord(-12, 12);
+    BlockIndex index;
+    const BlockBox box{VoxelKey(-6, -3, -2), VoxelKey(9, 7, 4)};
+    index.use_box(box);
+    EXPECT_TRUE(index.has_box());
+    EXPECT_THROW(index.use_box(box), InvalidArgument);
+    std::map<Tuple, std::uint32_t> oracle;
+    for (std::uint32_t i = 0; i < 3000; ++i) {
+        const VoxelKey k(coord(rng), coord(rng), coord(rng));
+        const auto [value, added] = index.try_emplace(k, i);
+        const auto [it, oracle_added] = oracle.try_emplace(tuple_of(k), i);
+        ASSERT_EQ(added, oracle_added);
+        ASSERT_EQ(value, it->second);
+    }
+    std::size_t inside = 0;
+    for (int z = -13; z <= 13; ++z)
+        for (int y = -13; y <= 13; ++y)
+            for (int x = -13; x <= 13; ++x) {
+                const auto it = oracle.find({x, y, z});
+                ASSERT_EQ(index.find(VoxelKey(x, y, z)), it == oracle.end() ? BlockIndex::kAbsent : it->second);
+                inside += it != oracle.end() && (VoxelKey(x, y, z) - box.lo).minCoeff() >= 0 && ((box.size - (VoxelKey(x, y, z) - box.lo)).array() > 0).all();
+            }
+    EXPECT_GT(inside, 0u);  // the box held some keys, the hash the others
+    EXPECT_LT(inside, oracle.size());
+    BlockIndex filled;
+    filled.try_emplace(VoxelKey(0, 0, 0), 0);
+    EXPECT_THROW(filled.use_box(box), InvalidArgument);
+    EXPECT_THROW(BlockIndex().use_box({VoxelKey(0, 0, 0), VoxelKey(0, 1, 1)}), InvalidArgument);
+
+    const std::vector<VoxelKey> keys{{3, -2, 0}, {-1, 5, 1}, {0, 0, -4}};
+    const std::optional<BlockBox> b = dense_block_box(keys, 2, 360);  // 1,080 cells: 360 per key
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->lo, VoxelKey(-3, -4, -6));
+    EXPECT_EQ(b->size, VoxelKey(9, 12, 10));  // extent 5, 8, 6 plus 2 on each side
+    EXPECT_FALSE(dense_block_box(keys, 2, 359));
+    EXPECT_FALSE(dense_block_box({}, 0, 64));
+    EXPECT_FALSE(dense_block_box({VoxelKey(-kMaxLatticeIndex / 8, 0, 0), VoxelKey(kMaxLatticeIndex / 8, 0, 0)}, 0, 64));
 }
 
 // CornerAccessor (remembers a block per parity of its coordinates) against the map's own lookup:

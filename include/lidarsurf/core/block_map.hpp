@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <algorithm>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -19,16 +20,33 @@
 
 namespace lidarsurf {
 
+/// The smallest box of block keys holding `keys`, grown by `margin` blocks on every side, if it
+/// holds at most `cells_per_key` cells per key (else nullopt): a box for BlockIndex::use_box.
+struct BlockBox {
+    VoxelKey lo = VoxelKey::Zero();
+    VoxelKey size = VoxelKey::Zero();  ///< cells per axis
+};
+std::optional<BlockBox> dense_block_box(const std::vector<VoxelKey>& keys, int margin, std::size_t cells_per_key);
+
 /// Open-addressing hash table from block keys (packed to 64 bits) to block numbers: linear
-/// probing, load <= 1/2. Much faster than std::unordered_map for this small, hot lookup.
+/// probing, load <= 1/2. Much faster than std::unordered_map for this small, hot lookup. With a
+/// box (use_box), the keys inside it are held by a dense table of the box instead: one load
+/// and no probe (a probe for an absent key runs on to an empty slot).
 class BlockIndex {
 public:
     static constexpr std::uint32_t kAbsent = 0xffffffffu;
 
     /// Bytes held by the table.
-    std::size_t memory_bytes() const { return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(std::uint32_t); }
+    std::size_t memory_bytes() const {
+        return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(std::uint32_t) + box_.capacity() * sizeof(std::uint32_t);
+    }
+    /// Holds the keys of `box` in a dense table from now on (the others stay in the hash). Only
+    /// on an empty index; throws InvalidArgument otherwise.
+    void use_box(const BlockBox& box);
+    bool has_box() const { return !box_.empty(); }
 
     std::uint32_t find(const VoxelKey& key) const {
+        if (const std::uint32_t* cell = box_cell(key)) return *cell;
         if (keys_.empty()) return kAbsent;
         const std::uint64_t packed = pack_key(key);
         for (std::size_t i = mix64(packed) & mask_;; i = (i + 1) & mask_) {
@@ -38,6 +56,11 @@ public:
     }
     /// The value of `key`, inserting `value` first if absent; .second tells whether it was.
     std::pair<std::uint32_t, bool> try_emplace(const VoxelKey& key, std::uint32_t value) {
+        if (std::uint32_t* cell = box_cell(key)) {
+            if (*cell != kAbsent) return {*cell, false};
+            *cell = value;
+            return {value, true};
+        }
         if (2 * (size_ + 1) > keys_.size()) grow(std::max<std::size_t>(64, 2 * keys_.size()));
         const std::uint64_t packed = pack_key(key);
         std::size_t i = mix64(packed) & mask_;
@@ -56,6 +79,17 @@ public:
 
 private:
     static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // pack_key never gives this
+    // The dense table's cell of `key`, or nullptr outside the box (or without one).
+    const std::uint32_t* box_cell(const VoxelKey& key) const {
+        const VoxelKey d = key - box_lo_;  // keys within +-2^20: no overflow
+        if (static_cast<unsigned>(d.x()) >= static_cast<unsigned>(box_size_.x()) ||
+            static_cast<unsigned>(d.y()) >= static_cast<unsigned>(box_size_.y()) ||
+            static_cast<unsigned>(d.z()) >= static_cast<unsigned>(box_size_.z()))
+            return nullptr;
+        return &box_[static_cast<std::size_t>(d.x()) +
+                     static_cast<std::size_t>(box_size_.x()) * (static_cast<std::size_t>(d.y()) + static_cast<std::size_t>(box_size_.y()) * static_cast<std::size_t>(d.z()))];
+    }
+    std::uint32_t* box_cell(const VoxelKey& key) { return const_cast<std::uint32_t*>(std::as_const(*this).box_cell(key)); }
     void grow(std::size_t capacity) {
         std::vector<std::uint64_t> old_keys(capacity, kEmpty);
         std::vector<std::uint32_t> old_values(capacity);
@@ -72,7 +106,12 @@ private:
     }
     std::vector<std::uint64_t> keys_;
     std::vector<std::uint32_t> values_;
-    std::size_t mask_ = 0, size_ = 0;
+    std::size_t mask_ = 0, size_ = 0;  // size_: the keys in the hash
+    // The dense table of the box [box_lo_, box_lo_ + box_size_), x fastest (kAbsent: no key);
+    // a size of 0 (no box) puts every key outside.
+    std::vector<std::uint32_t> box_;
+    VoxelKey box_lo_ = VoxelKey::Zero();
+    VoxelKey box_size_ = VoxelKey::Zero();
 };
 
 template <typename T>
@@ -162,6 +201,9 @@ public:
     }
     const T& empty_value() const { return empty_; }
 
+    /// Finds the blocks of `box` through a dense table (BlockIndex::use_box): for a map whose
+    /// blocks are known to lie mostly in a box (those of one frame). Only on an empty map.
+    void use_box(const BlockBox& box) { index_.use_box(box); }
     void reserve_blocks(std::size_t n) {
         index_.reserve(n);
         blocks_.reserve(n);

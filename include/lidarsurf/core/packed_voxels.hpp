@@ -63,9 +63,16 @@ public:
     const VoxelGrid& grid() const { return *grid_; }
     /// The block with key `key`, or nullptr when it holds no voxel. Thread-safe.
     const Block* find(const VoxelKey& key) const {
-        const std::int64_t b = dense_.empty() ? grid_->index().index_of(key) : dense_index(key);
-        if (b < 0) return nullptr;
-        const auto i = static_cast<std::size_t>(b);
+        std::size_t i;
+        if (dense_.has_box()) {
+            const std::uint32_t b = dense_.find(key);
+            if (b == BlockIndex::kAbsent) return nullptr;
+            i = b;
+        } else {
+            const std::int64_t b = grid_->index().index_of(key);
+            if (b < 0) return nullptr;
+            i = static_cast<std::size_t>(b);
+        }
         if (state_[i].load(std::memory_order_acquire) != kPacked) pack_now(i);
         return &blocks_[i];
     }
@@ -73,25 +80,15 @@ public:
     std::size_t packed_blocks() const;
     /// Bytes held by the snapshot (records reserved for every block; pages of unpacked ones are
     /// not touched).
-    std::size_t memory_bytes() const { return voxel_count_ * sizeof(Voxel) + blocks_.capacity() * (sizeof(Block) + 1); }
+    std::size_t memory_bytes() const { return voxel_count_ * sizeof(Voxel) + blocks_.capacity() * (sizeof(Block) + 1) + dense_.memory_bytes(); }
 
     /// Whether find() reads a dense table of the blocks' bounding box instead of probing the
     /// grid's hash index (built when the box holds at most kDenseCellsPerBlock cells per block).
-    bool dense() const { return !dense_.empty(); }
+    bool dense() const { return dense_.has_box(); }
     static constexpr std::size_t kDenseCellsPerBlock = 64;
 
 private:
     static constexpr std::uint8_t kUnpacked = 0, kBusy = 1, kPacked = 2;
-    // The creation index of block `key` from the dense table, or -1 outside the box or when absent.
-    std::int64_t dense_index(const VoxelKey& key) const {
-        const VoxelKey d = key - dense_min_;
-        if (static_cast<unsigned>(d.x()) >= static_cast<unsigned>(dense_size_.x()) ||
-            static_cast<unsigned>(d.y()) >= static_cast<unsigned>(dense_size_.y()) ||
-            static_cast<unsigned>(d.z()) >= static_cast<unsigned>(dense_size_.z()))
-            return -1;
-        return dense_[static_cast<std::size_t>(d.x()) +
-                      static_cast<std::size_t>(dense_size_.x()) * (static_cast<std::size_t>(d.y()) + static_cast<std::size_t>(dense_size_.y()) * static_cast<std::size_t>(d.z()))];
-    }
 
     void pack(std::size_t b) const;      // copies block b's records and builds its ranks
     void pack_now(std::size_t b) const;  // packs block b, or waits for the thread packing it
@@ -103,11 +100,9 @@ private:
     std::vector<std::size_t> start_;   // first record of each block
     mutable std::vector<Block> blocks_;  // in the grid's block creation order
     std::unique_ptr<std::atomic<std::uint8_t>[]> state_;
-    // Block creation index (-1: none) of each block key in [dense_min_, dense_min_ + dense_size_),
-    // x fastest; empty when the box is too sparse (find() then probes the grid's index).
-    std::vector<std::int32_t> dense_;
-    VoxelKey dense_min_ = VoxelKey::Zero();
-    VoxelKey dense_size_ = VoxelKey::Zero();
+    // The blocks' creation indices in a dense table of their box; without a box when the box is
+    // too sparse (find() then probes the grid's index).
+    BlockIndex dense_;
 };
 
 }  // namespace lidarsurf
