@@ -183,7 +183,8 @@ public:
     /// Runs the waves from wave(). A wave is examined in parallel chunks of `chunk` cubes, each
     /// with its own `make_view()`: `view.corners(cube, s)` sets the samples of the cube's corners
     /// and returns whether they are all defined (false: the cube cannot be active, skip it; `s`
-    /// may then be incomplete). `before_wave(cubes)` runs serially before each wave. Returns the
+    /// may then be incomplete); a view with a `prefetch(cube)` is asked to prefetch for the cube
+    /// kPrefetchAhead ahead in the chunk. `before_wave(cubes)` runs serially before each wave. Returns the
     /// active cubes, in wave order. Which cubes a wave leads to does not depend on the timing of
     /// the threads, but their order in the next wave does (the first thread to claim a cube takes
     /// it): nothing the search returns depends on that order (the callers sort the active cubes,
@@ -369,11 +370,6 @@ public:
         if (state == kUndefined) return false;
         return claim_or_wait(v, slot, state, value);
     }
-    /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
-    /// undefined corner cannot be active, so they are evaluated lazily, stopping at the first
-    /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
-    /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
-    /// only on their values, so the set of evaluated vertices does not depend on the order.
     /// Asks for the cache lines of `cube`'s corner slots, which corners() will read (a cube of a
     /// later wave is rarely next to the one before it, and its slots then miss the caches).
     void prefetch(const VoxelKey& cube) {
@@ -387,6 +383,11 @@ public:
         }
         for (int c : {0, 2, 4, 6}) __builtin_prefetch(slot + Slots::corner_step(c));
     }
+    /// Sets the samples of `cube`'s corners and returns whether all are defined. A cube with an
+    /// undefined corner cannot be active, so they are evaluated lazily, stopping at the first
+    /// undefined one: its all-even corner, its all-odd corner, then the other six in index order
+    /// (every cube has exactly one corner of each parity). Which corners a cube evaluates depends
+    /// only on their values, so the set of evaluated vertices does not depend on the order.
     bool corners(const VoxelKey& cube, CornerValues& s) {
         // The even corner's index has bit a set where the base is odd on axis a; the odd one is its complement.
         const int even = (cube.x() & 1) | ((cube.y() & 1) << 1) | ((cube.z() & 1) << 2);

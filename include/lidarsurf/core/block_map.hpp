@@ -20,12 +20,13 @@
 
 namespace lidarsurf {
 
-/// The smallest box of block keys holding `keys`, grown by `margin` blocks on every side, if it
-/// holds at most `cells_per_key` cells per key (else nullopt): a box for BlockIndex::use_box.
+/// A box of block keys: [lo, lo + size) per axis.
 struct BlockBox {
     VoxelKey lo = VoxelKey::Zero();
     VoxelKey size = VoxelKey::Zero();  ///< cells per axis
 };
+/// The smallest box of block keys holding `keys`, grown by `margin` blocks on every side, if it
+/// holds at most `cells_per_key` cells per key (else nullopt): a box for BlockIndex::use_box.
 std::optional<BlockBox> dense_block_box(const std::vector<VoxelKey>& keys, int margin, std::size_t cells_per_key);
 
 /// Open-addressing hash table from block keys (packed to 64 bits) to block numbers: linear
