@@ -538,9 +538,8 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // for a cube's far corners): through a dense table of that box, when it is small (a frame's
     // is ~100k cells, 0.4 MB; the hash, which the blocks outside it use, probed ~300k times per
     // KITTI frame).
-    std::optional<BlockBox> search_box = dense_block_box(grid.index().block_keys(), reach + 1, PackedVoxels::kDenseCellsPerBlock);
-    if (search_box && std::int64_t{search_box->size.x()} * search_box->size.y() * search_box->size.z() > (std::int64_t{1} << 21))
-        search_box.reset();
+    const std::optional<BlockBox> search_box =
+        dense_block_box(grid.index().block_keys(), reach + 1, PackedVoxels::kDenseCellsPerBlock, std::size_t{1} << 21);
     if (search_box) slots.use_box(*search_box);
     EvaluatedStore defined_vertices;
     // ~3 per occupied voxel on lidar frames (more grows it). One block reserved up front costs

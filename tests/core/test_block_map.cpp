@@ -116,6 +116,8 @@ TEST(BlockIndex, ABoxHoldsItsKeysAndTheHashTheOthers) {
     EXPECT_EQ(b->lo, VoxelKey(-3, -4, -6));
     EXPECT_EQ(b->size, VoxelKey(9, 12, 10));  // extent 5, 8, 6 plus 2 on each side
     EXPECT_FALSE(dense_block_box(keys, 2, 359));
+    EXPECT_TRUE(dense_block_box(keys, 2, 360, 1080));
+    EXPECT_FALSE(dense_block_box(keys, 2, 360, 1079));  // the cap on the cells
     EXPECT_FALSE(dense_block_box({}, 0, 64));
     EXPECT_FALSE(dense_block_box({VoxelKey(-kMaxLatticeIndex / 8, 0, 0), VoxelKey(kMaxLatticeIndex / 8, 0, 0)}, 0, 64));
 }

@@ -26,8 +26,10 @@ struct BlockBox {
     VoxelKey size = VoxelKey::Zero();  ///< cells per axis
 };
 /// The smallest box of block keys holding `keys`, grown by `margin` blocks on every side, if it
-/// holds at most `cells_per_key` cells per key (else nullopt): a box for BlockIndex::use_box.
-std::optional<BlockBox> dense_block_box(const std::vector<VoxelKey>& keys, int margin, std::size_t cells_per_key);
+/// holds at most `cells_per_key` cells per key and at most `max_cells` cells (else nullopt): a
+/// box for BlockIndex::use_box.
+std::optional<BlockBox> dense_block_box(const std::vector<VoxelKey>& keys, int margin, std::size_t cells_per_key,
+                                        std::size_t max_cells = std::size_t{1} << 40);
 
 /// Open-addressing hash table from block keys (packed to 64 bits) to block numbers: linear
 /// probing, load <= 1/2. Much faster than std::unordered_map for this small, hot lookup. With a
