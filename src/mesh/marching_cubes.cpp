@@ -104,9 +104,21 @@ public:
     MeshBuilder(const TsdfField& field, VertexPlacement placement, WeldTable& ids)
         : field_(field), placement_(placement), lookup_(field), ids_(ids) {}
 
+    /// A cube's corner samples; false (the cube is skipped) unless its 8 corners are defined.
+    using Corners = std::array<const VertexSample*, 8>;
+    bool corners(const VoxelKey& base, Corners& s) { return lookup_.corners(base, s); }
+    /// Starts loading the welding slots of the corners `s` (those process_cube reads for the
+    /// cube's edge vertices): the table is indexed by the field's order, and its loads were the
+    /// largest stall of the meshing (docs/benchmarks.md, session 28).
+    void prefetch_welds(const Corners& s) const {
+        for (const VertexSample* c : s) __builtin_prefetch(&ids_[index_of(*c)]);
+    }
     void process_cube(const VoxelKey& base) {
-        std::array<const VertexSample*, 8> s{};
-        if (!lookup_.corners(base, s)) return;  // only cubes whose 8 corners are defined
+        Corners s{};
+        if (corners(base, s)) process_cube(base, s);
+    }
+    /// Meshes the cube at `base` whose 8 corner samples are `s`.
+    void process_cube(const VoxelKey& base, const Corners& s) {
         unsigned config = 0;  // bit c: corner c is negative (zero counts as positive: outside)
         for (int c = 0; c < 8; ++c) config |= static_cast<unsigned>(s[c]->tsdf < 0) << c;
         if (config == 0 || config == 255) return;
@@ -259,10 +271,20 @@ private:
 // Meshes cubes [first, last) with `builder`, compiled for the Avx2 level where the CPU has it
 // (core/simd.hpp: process_cube inlined, its double arithmetic in VEX encoding, no FMA, so the same
 // mesh).
+// The corners of the next cube are found, and their welding slots prefetched, before the current
+// cube is meshed.
 void mesh_cubes(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
     builder.reserve(static_cast<std::size_t>(last - first));
     call_at_simd_level([&] {
-        for (const VoxelKey* cube = first; cube != last; ++cube) builder.process_cube(*cube);
+        MeshBuilder::Corners current{}, next{};
+        bool current_defined = first != last && builder.corners(*first, current);
+        for (const VoxelKey* cube = first; cube != last; ++cube) {
+            const bool next_defined = cube + 1 != last && builder.corners(cube[1], next);
+            if (next_defined) builder.prefetch_welds(next);
+            if (current_defined) builder.process_cube(*cube, current);
+            current = next;
+            current_defined = next_defined;
+        }
     });
 }
 
