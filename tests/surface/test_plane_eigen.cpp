@@ -85,6 +85,41 @@ TEST(PlaneEigen, MatchesTheIterativeSolverOnRandomCovariances) {
     EXPECT_GT(solved, 10000);  // log-uniform eigenvalues: a quarter of the draws are lines (lambda2 << lambda1)
 }
 
+// Newton's stop (a step <= 1e-13 T, or an estimated error after the step <= 1e-17 T) against the
+// smallest root of the same matrix's characteristic polynomial solved in long double (64-bit
+// mantissa) until its steps stop shrinking: on planar covariances (lambda3 from 1e-7.5 to 0.3 of
+// lambda2, the shapes the evaluation fits), lambda3 must be the root to the rounding of the
+// double coefficients, which a stop one step early would miss by far.
+TEST(PlaneEigen, StopsAtTheRootToRounding) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int trial = 0; trial < 5000; ++trial) {
+        const double scale = std::pow(10.0, 6.0 * u(rng) - 5.0);  // 1e-5 .. 10 m^2
+        const double l1 = scale, l2 = scale * (0.05 + 0.95 * u(rng)), l3 = l2 * std::pow(10.0, -7.0 * u(rng) - 0.5);
+        const Eigen::Matrix3d c = with_eigen(l1, l2, l3, random_rotation(rng));
+        const auto eig = plane_eigen(c);
+        ASSERT_TRUE(eig) << trial;
+        using Long = long double;
+        const Long t = Long(c(0, 0)) + c(1, 1) + c(2, 2), shift = t / 3;
+        const Long xx = c(0, 0) - shift, xy = c(0, 1), xz = c(0, 2), yy = c(1, 1) - shift, yz = c(1, 2), zz = c(2, 2) - shift;
+        const Long m = xx * yy - xy * xy + xx * zz - xz * xz + yy * zz - yz * yz;
+        const Long d = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+        Long l = -shift, last = HUGE_VALL;  // left of the root: Newton rises to it
+        for (int i = 0; i < 200; ++i) {
+            const Long step = ((l * l + m) * l - d) / (3 * l * l + m);
+            if (!(std::fabs(step) < last)) break;
+            last = std::fabs(step);
+            l -= step;
+        }
+        const double root = static_cast<double>(shift + l);
+        // The double coefficients carry ~eps T^3 of rounding, which moves the root by that over
+        // p'(lambda3) = (l1 - l3)(l2 - l3).
+        const double conditioning = 2.2e-16 * std::pow(static_cast<double>(t), 3) / ((l1 - l3) * (l2 - l3));
+        const double error = std::fabs(eig->lambda3 - root) / conditioning;
+        EXPECT_LT(error, 4.0) << trial << " l3 / l2 " << l3 / l2;  // 0.19 at worst; 1e-11 for 1e-17 in the stop fails it
+    }
+}
+
 // Nearly isotropic covariances (all eigenvalues within a small spread s of each other, gaps s / 2):
 // Newton's early stop (a step <= 1e-13 T) leaves an error of order 1e-23 T^3 / s^2 there, the
 // case its bound is weakest for; the eigenvalues must still be right to rounding of T.
