@@ -270,9 +270,8 @@ private:
 
 // Meshes cubes [first, last) with `builder`, compiled for the Avx2 level where the CPU has it
 // (core/simd.hpp: process_cube inlined, its double arithmetic in VEX encoding, no FMA, so the same
-// mesh).
-// The corners of the next cube are found, and their welding slots prefetched, before the current
-// cube is meshed.
+// mesh). The corners of the next cube are found, and their welding slots prefetched, before the
+// current cube is meshed.
 void mesh_cubes(MeshBuilder& builder, const VoxelKey* first, const VoxelKey* last) {
     builder.reserve(static_cast<std::size_t>(last - first));
     call_at_simd_level([&] {

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include <Eigen/Eigenvalues>
@@ -114,7 +115,7 @@ TEST(PlaneEigen, StopsAtTheRootToRounding) {
         const double root = static_cast<double>(shift + l);
         // The double coefficients carry ~eps T^3 of rounding, which moves the root by that over
         // p'(lambda3) = (l1 - l3)(l2 - l3).
-        const double conditioning = 2.2e-16 * std::pow(static_cast<double>(t), 3) / ((l1 - l3) * (l2 - l3));
+        const double conditioning = std::numeric_limits<double>::epsilon() * std::pow(static_cast<double>(t), 3) / ((l1 - l3) * (l2 - l3));
         const double error = std::fabs(eig->lambda3 - root) / conditioning;
         EXPECT_LT(error, 4.0) << trial << " l3 / l2 " << l3 / l2;  // 0.19 at worst; 1e-11 for 1e-17 in the stop fails it
     }
