@@ -3,6 +3,7 @@
 // returns a mesh whose vertices are finite, whose faces refer to existing vertices, and whose
 // vertices lie within the data's bounding box grown by the largest neighbourhood (a vertex of
 // the lattice is only defined if H^k(v) holds points, Sec. III-B).
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <vector>
@@ -90,12 +91,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const double reach = (c.max_reach() + 2) * c.voxel_size * 1.7320508075688772;
 
     // The reference path is O(k^3) per candidate vertex: run it on one input in eight. It and the
-    // unseeded fast path evaluate every vertex within k_max of the data: only on small clouds, as
-    // IMLS below (session 27: 825 points at 2 cm voxels took 63 s unseeded under the sanitizers,
-    // past libFuzzer's timeout; slow, not a hang).
+    // unseeded fast path evaluate every vertex within the reach of the data, so their work grows as
+    // points x (2 reach + 1)^3 candidates x (2 k_max)^3 voxels each: they run only where that
+    // bound is <= 2e7 (and on <= 400 points, as IMLS below). Slow, not hangs: session 27's
+    // fuzzer met 825 points at 2 cm voxels that took 63 s unseeded under the sanitizers, session
+    // 28's 387 points at k_max 8 that passed the 400-point limit and took over 15 s (reference).
+    const double reach_side = 2.0 * std::max(c.max_reach(), 1) + 1, level_side = 2.0 * std::max(c.max_level(), 1);
+    const double every_vertex_work = static_cast<double>(points.size()) * reach_side * reach_side * reach_side * level_side * level_side * level_side;
     for (const Evaluation e : {Evaluation::Fast, Evaluation::Reference}) {
         if (e == Evaluation::Reference && (flags & 8) == 0) continue;
-        if ((e == Evaluation::Reference || !c.seeded_surface) && points.size() > 400) continue;
+        if ((e == Evaluation::Reference || !c.seeded_surface) && (points.size() > 400 || every_vertex_work > 2e7)) continue;
         fuzz::expect_typed([&] {
             Reconstructor r(c, offset + sensor);
             r.integrate(cloud);
