@@ -5,6 +5,7 @@
 // the lattice is only defined if H^k(v) holds points, Sec. III-B).
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -97,7 +98,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // fuzzer met 825 points at 2 cm voxels that took 63 s unseeded under the sanitizers, session
     // 28's 387 points at k_max 8 that passed the 400-point limit and took over 15 s (reference).
     const double reach_side = 2.0 * std::max(c.max_reach(), 1) + 1, level_side = 2.0 * std::max(c.max_level(), 1);
-    const double every_vertex_work = static_cast<double>(points.size()) * reach_side * reach_side * reach_side * level_side * level_side * level_side;
+    const double every_vertex_work = static_cast<double>(points.size()) * std::pow(reach_side * level_side, 3);
     for (const Evaluation e : {Evaluation::Fast, Evaluation::Reference}) {
         if (e == Evaluation::Reference && (flags & 8) == 0) continue;
         if ((e == Evaluation::Reference || !c.seeded_surface) && (points.size() > 400 || every_vertex_work > 2e7)) continue;
