@@ -478,7 +478,10 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
     const VoxelKey first = vertex_block_ * B - first_voxel_;  // the vertex block's first vertex
     const VoxelKey l = first.array() - cube_level_, h = first.array() + (6 + cube_level_);
     // The region's layers (one pass over the blocks), then their voxels (one allocation per array).
-    std::vector<LayerBits> layers;
+    // A scratch array per thread, reused from list to list: a vector per list, grown by doubling,
+    // was about five allocations per list, half of a KITTI frame's (docs/benchmarks.md, session 29).
+    thread_local std::vector<LayerBits> layers;
+    layers.clear();
     std::size_t count = 0;
     for_each_block(l, h, [&](const PackedVoxels::Block& block, const VoxelKey& b, unsigned in_box, std::uint64_t full) {
         for (; in_box; in_box &= in_box - 1) {
