@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstddef>
 #include <memory>
+#include <new>
 #include <string>
 
 // The SSE2 code (x86-64's baseline) unless LIDARSURF_SCALAR asks for the portable code.
@@ -338,12 +339,14 @@ void NeighbourhoodWindow::reset(const VoxelKey& vertex_block) {
     }
     simd_ = simd_level();
     shared_ = nullptr;
+    arena_ = nullptr;
     list_ = nullptr;
     levels_valid_ = false;
 }
 
-void NeighbourhoodWindow::share_list(SharedList* list) {
+void NeighbourhoodWindow::share_list(SharedList* list, ListArena* arena) {
     shared_ = list;
+    arena_ = arena;
     list_ = nullptr;
     levels_valid_ = false;
 }
@@ -457,11 +460,37 @@ template <bool Popcount>
     sums.store(acc);
 }
 
-NeighbourhoodWindow::VoxelList NeighbourhoodWindow::VoxelList::padding(std::size_t size, std::uint8_t pad) {
+void* NeighbourhoodWindow::ListArena::allocate(std::size_t bytes) {
+    constexpr std::size_t kAlign = alignof(std::max_align_t), kChunk = std::size_t{1} << 18;
+    bytes = (bytes + kAlign - 1) / kAlign * kAlign;
+    if (bytes > left_) {
+        // A new chunk (new[] aligns for any type); a request of over a quarter chunk gets its own,
+        // so a chunk's unused tail stays under a quarter of it.
+        const std::size_t size = bytes > kChunk / 4 ? bytes : kChunk;
+        chunks_.push_back(std::make_unique_for_overwrite<std::byte[]>(size));
+        if (size != kChunk) return chunks_.back().get();  // the current chunk stays current
+        next_ = chunks_.back().get();
+        left_ = size;
+    }
+    void* at = next_;
+    next_ += bytes;
+    left_ -= bytes;
+    return at;
+}
+
+NeighbourhoodWindow::VoxelList NeighbourhoodWindow::VoxelList::padding(std::size_t size, std::uint8_t pad, ListArena* arena) {
     VoxelList l;
     l.size = size;
-    l.storage_ = std::make_unique_for_overwrite<std::byte[]>(size * (sizeof(const PackedVoxels::Voxel*) + 4));
-    l.records = reinterpret_cast<const PackedVoxels::Voxel**>(l.storage_.get());  // at the allocation's start: aligned
+    const std::size_t bytes = size * (sizeof(const PackedVoxels::Voxel*) + 4);
+    std::byte* storage;
+    if (arena) {
+        storage = static_cast<std::byte*>(arena->allocate(bytes));
+        l.in_arena_ = true;
+    } else {
+        l.storage_ = std::make_unique_for_overwrite<std::byte[]>(bytes);
+        storage = l.storage_.get();
+    }
+    l.records = reinterpret_cast<const PackedVoxels::Voxel**>(storage);  // at the allocation's start: aligned
     std::fill_n(l.records, size, nullptr);
     l.x = reinterpret_cast<std::uint8_t*>(l.records + size);
     l.y = l.x + size;
@@ -472,7 +501,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::VoxelList::padding(std::size
     return l;
 }
 
-NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
+NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list(ListArena* arena) const {
     constexpr int B = Map::kSize, m = B - 1;
     // The region [8b - K, 8b + 6 + K]^3, in window coordinates.
     const VoxelKey first = vertex_block_ * B - first_voxel_;  // the vertex block's first vertex
@@ -492,7 +521,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list() const {
             }
         }
     });
-    VoxelList list = VoxelList::padding((count + kLanes - 1) / kLanes * kLanes, kPad);
+    VoxelList list = VoxelList::padding((count + kLanes - 1) / kLanes * kLanes, kPad, arena);
     std::size_t at = 0;
     for (const LayerBits& layer : layers) {
         const auto z = static_cast<std::uint8_t>(layer.z - l.z());
@@ -522,7 +551,12 @@ const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::first_list() const {
         return own_;
     }
     const VoxelList* published = shared_->list_.load(std::memory_order_acquire);
-    if (!published) {
+    if (!published && arena_) {
+        // In the arena, the list's header too; a copy that loses the race stays there unused.
+        const VoxelList* mine = new (arena_->allocate(sizeof(VoxelList))) VoxelList(build_list(arena_));
+        if (shared_->list_.compare_exchange_strong(published, mine, std::memory_order_acq_rel, std::memory_order_acquire))
+            published = mine;  // else `published` is another thread's identical list
+    } else if (!published) {
         auto mine = std::make_unique<const VoxelList>(build_list());
         if (shared_->list_.compare_exchange_strong(published, mine.get(), std::memory_order_acq_rel, std::memory_order_acquire))
             published = mine.release();  // else `published` is another thread's identical list

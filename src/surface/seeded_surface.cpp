@@ -341,8 +341,11 @@ public:
         std::atomic<std::size_t>& reused;     ///< vertices taken from `previous`
         tbb::enumerable_thread_specific<StoreRun>& runs;  ///< each thread's claimed part of `defined`
         BlockLists& lists;                    ///< the windows' shared voxel list, by slot block
+        /// Each thread's memory for the lists it builds (outlives `lists`; freed at once at the end).
+        tbb::enumerable_thread_specific<NeighbourhoodWindow::ListArena>& arenas;
     };
-    explicit CornerEvaluator(const Shared& shared) : s_(shared), values_(shared.slots), ahead_(shared.slots), run_(shared.runs.local()) {
+    explicit CornerEvaluator(const Shared& shared)
+        : s_(shared), values_(shared.slots), ahead_(shared.slots), run_(shared.runs.local()), arena_(shared.arenas.local()) {
         if (shared.previous) previous_.emplace(*shared.previous);
     }
     CornerEvaluator(const CornerEvaluator&) = delete;
@@ -462,7 +465,7 @@ private:
         if (windows_[w]) windows_[w]->reset(block);
         else windows_[w].emplace(s_.packed, block, s_.config.max_reach(), s_.config.max_level());
         // The block exists: v's slot is in it.
-        windows_[w]->share_list(&s_.lists[static_cast<std::size_t>(s_.slots.index_of(block))]);
+        windows_[w]->share_list(&s_.lists[static_cast<std::size_t>(s_.slots.index_of(block))], &arena_);
         window_block_[w] = block;
         return *windows_[w];
     }
@@ -471,6 +474,7 @@ private:
     Slots::CornerAccessor values_;
     Slots::CornerAccessor ahead_;  // prefetch()'s own, so that it does not displace values_'s blocks
     StoreRun& run_;
+    NeighbourhoodWindow::ListArena& arena_;  // the lists this thread builds
     std::size_t evaluated_ = 0, reused_ = 0;
     std::array<std::optional<NeighbourhoodWindow>, kWindows> windows_;
     std::array<VoxelKey, kWindows> window_block_;
@@ -548,11 +552,12 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     defined_vertices.reserve(std::min<std::size_t>(4 * grid.size(), std::size_t{1} << 22));
     std::atomic<std::size_t> evaluated{0}, reused{0};
     tbb::enumerable_thread_specific<StoreRun> runs;
+    tbb::enumerable_thread_specific<NeighbourhoodWindow::ListArena> arenas;  // before `lists`: destroyed after it
     BlockLists lists;
     const PackedVoxels packed(grid, previous ? &dirty.eager_blocks : nullptr);
     const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
                                          defined_vertices, evaluated, previous, dirty.vertex_blocks, reused, runs,
-                                         lists};
+                                         lists, arenas};
     CubeSearch search(grid);
     if (search_box) search.visited().use_box(*search_box);
     // One evaluator per thread, for every task and wave: its windows (and their voxel lists and

@@ -4,9 +4,13 @@
 // evaluate_vertex, for both eigen solvers, far from the world origin and across block borders.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <random>
+#include <vector>
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/surface/neighbourhood.hpp"
@@ -260,19 +264,22 @@ TEST(NeighbourhoodWindow, SlabSumsAreTheSameBitsAtEverySimdLevel) {
 }
 
 // Windows of one vertex block sharing its list (the fast path's windows on several threads):
-// whichever builds it, each sums what a window with its own list does, and the list is built once.
+// whichever builds it, each sums what a window with its own list does, and the list is built once;
+// the same with the shared list built in the windows' arenas (one each, as one per thread).
 TEST(NeighbourhoodWindow, WindowsSharingTheirBlocksListSumTheSame) {
     const double alpha = 0.2;
     const VoxelGrid grid = wavy_grid(alpha);
     const PackedVoxels packed(grid);
     std::mt19937 rng(17);
-    for (int trial = 0; trial < 50; ++trial) {
+    for (int trial = 0; trial < 100; ++trial) {
         const VoxelKey v = random_vertex(rng);
+        const bool in_arenas = trial % 2 == 1;
+        NeighbourhoodWindow::ListArena arena1, arena2;  // outlive `shared`
         NeighbourhoodWindow::SharedList shared;
         NeighbourhoodWindow first(packed, VoxelKey::Zero(), 5), second(packed, vertex_block(v), 5);
         first.reset(vertex_block(v));  // a reused window: reset() then share_list()
-        first.share_list(&shared);
-        second.share_list(&shared);
+        first.share_list(&shared, in_arenas ? &arena1 : nullptr);
+        second.share_list(&shared, in_arenas ? &arena2 : nullptr);
         const NeighbourhoodWindow alone(packed, vertex_block(v), 5);
         // Vertices of the same block in turn, through either window.
         for (int i = 0; i < 8; ++i) {
@@ -285,6 +292,37 @@ TEST(NeighbourhoodWindow, WindowsSharingTheirBlocksListSumTheSame) {
             }
         }
     }
+}
+
+// The arena hands out aligned, disjoint ranges that stay valid until it goes: small requests
+// across many chunks and large ones (over a quarter chunk) on their own, interleaved. Each range is
+// filled with its own byte, then all are checked after the last allocation.
+TEST(NeighbourhoodWindow, ListArenaGivesAlignedDisjointMemory) {
+    NeighbourhoodWindow::ListArena arena;
+    std::mt19937 rng(23);
+    std::uniform_int_distribution<std::size_t> small(1, 20000);
+    struct Range {
+        std::byte* at;
+        std::size_t size;
+        std::byte fill;
+    };
+    std::vector<Range> ranges;
+    for (int i = 0; i < 600; ++i) {
+        const std::size_t size = i % 50 == 7 ? std::size_t{1} << 20 : small(rng);  // 1 MiB: above a chunk
+        auto* at = static_cast<std::byte*>(arena.allocate(size));
+        ASSERT_NE(at, nullptr);
+        ASSERT_EQ(reinterpret_cast<std::uintptr_t>(at) % alignof(std::max_align_t), 0u) << i;
+        const auto fill = static_cast<std::byte>(i % 251);
+        std::fill_n(at, size, fill);
+        ranges.push_back({at, size, fill});
+    }
+    for (std::size_t i = 0; i < ranges.size(); ++i)
+        ASSERT_EQ(std::count(ranges[i].at, ranges[i].at + ranges[i].size, ranges[i].fill), static_cast<std::ptrdiff_t>(ranges[i].size))
+            << "range " << i << " was overwritten";
+    // Disjoint, also as address intervals.
+    auto address = [](const std::byte* p) { return reinterpret_cast<std::uintptr_t>(p); };
+    std::sort(ranges.begin(), ranges.end(), [&](const Range& a, const Range& b) { return address(a.at) < address(b.at); });
+    for (std::size_t i = 1; i < ranges.size(); ++i) EXPECT_GE(address(ranges[i].at), address(ranges[i - 1].at) + ranges[i - 1].size) << i;
 }
 
 // The level the adaptive loop starts from: against the counts of merge_neighbourhood, on sparse

@@ -55,26 +55,50 @@ public:
     /// coordinates beyond every level. Its arrays share one allocation: a frame builds and frees
     /// thousands of lists (with five allocations each, freeing them alone took 1.2 ms of a KITTI
     /// frame, on one thread).
+    struct VoxelList;
+    /// Memory for voxel lists that are freed together, when the arena goes: bump allocation from
+    /// large chunks. The surface search builds thousands of shared lists per frame; allocating
+    /// each (and freeing each, serially, at the end of the frame: ~0.5 ms of a KITTI frame) cost
+    /// more than the arena's few chunks (docs/benchmarks.md, session 29). Not thread-safe: one
+    /// arena per thread.
+    class ListArena {
+    public:
+        /// `bytes` bytes aligned for any type (alignof(std::max_align_t)), until the arena is destroyed.
+        void* allocate(std::size_t bytes);
+
+    private:
+        std::vector<std::unique_ptr<std::byte[]>> chunks_;
+        std::byte* next_ = nullptr;
+        std::size_t left_ = 0;
+    };
     struct VoxelList {
         std::size_t size = 0;  ///< entries in each array
         const PackedVoxels::Voxel** records = nullptr;
         std::uint8_t *x = nullptr, *y = nullptr, *z = nullptr;
         std::uint8_t* weight = nullptr;  ///< the voxel's point count, saturated at 255 (padding: 0)
-        /// A list of `size` padding entries: records nullptr, coordinates `pad`, weight 0.
-        static VoxelList padding(std::size_t size, std::uint8_t pad);
+        /// A list of `size` padding entries: records nullptr, coordinates `pad`, weight 0; its
+        /// arrays in `arena` if given (then they live as long as the arena), else owned.
+        static VoxelList padding(std::size_t size, std::uint8_t pad, ListArena* arena = nullptr);
+        /// Whether the arrays are in an arena (not owned).
+        bool in_arena() const { return in_arena_; }
 
     private:
         std::unique_ptr<std::byte[]> storage_;  // the records' addresses, then x, y, z and weight
+        bool in_arena_ = false;
     };
     /// The voxel list of one vertex block, for the windows of that block to share, whatever their
     /// thread: the first window that needs it builds and publishes it (if two race, one copy is
-    /// kept). Owns the published list.
+    /// kept). Owns the published list unless it was built in an arena (share_list), which must
+    /// then outlive this.
     class SharedList {
     public:
         SharedList() = default;
         SharedList(const SharedList&) = delete;
         SharedList& operator=(const SharedList&) = delete;
-        ~SharedList() { delete list_.load(std::memory_order_relaxed); }
+        ~SharedList() {
+            const VoxelList* list = list_.load(std::memory_order_relaxed);
+            if (list && !list->in_arena()) delete list;
+        }
 
     private:
         friend class NeighbourhoodWindow;
@@ -92,8 +116,9 @@ public:
     /// at the last reset().
     void reset(const VoxelKey& vertex_block);
     /// Makes the window take its voxel list from `list` (that of its vertex block, with the same
-    /// voxels and cube_level), or publish there the one it builds, until the next reset().
-    void share_list(SharedList* list);
+    /// voxels and cube_level), or publish there the one it builds, until the next reset(). With
+    /// `arena` (this thread's, outliving `list`), a list the window builds lives in the arena.
+    void share_list(SharedList* list, ListArena* arena = nullptr);
 
     /// Adds the voxels of H^k(v) \ H^{k-1}(v) (all of H^1 for k = 1) to `acc`, whose reference
     /// point is v's position. v must be in the window's vertex block and k <= max_level.
@@ -145,7 +170,7 @@ private:
     // The voxel list (building it, or taking it from the shared list, on first use: first_list).
     const VoxelList& list() const;
     const VoxelList& first_list() const;
-    VoxelList build_list() const;
+    VoxelList build_list(ListArena* arena = nullptr) const;
     // Whether H^k(v) goes through the voxel list.
     bool listed(const VoxelKey& v, int k) const;
     // The level of each listed voxel for v (computed once per vertex).
@@ -173,6 +198,7 @@ private:
     std::uint32_t stamp_ = 0;
 
     SharedList* shared_ = nullptr;          // where the list is shared (nullptr: own_)
+    ListArena* arena_ = nullptr;            // where a shared list this window builds lives (nullptr: the heap)
     mutable const VoxelList* list_ = nullptr;  // the list in use, nullptr until first use
     mutable VoxelList own_;                 // the list built for this window alone
     // The levels for vertex level_vertex_, while levels_valid_.
