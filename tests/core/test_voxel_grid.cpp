@@ -138,6 +138,67 @@ TEST(VoxelGrid, BatchInsertIsOneByOneInsertionToTheLastBit) {
     }
 }
 
+// The same on points in scan order, as a lidar delivers them (two thirds of a KITTI frame's points
+// follow a point of their voxel): runs of consecutive points in one voxel, some longer than the
+// batch insert's parallel chunks (4096 points), runs broken by non-finite points or by the end of a
+// batch, and voxels met again after other ones. Also the order in which blocks were first touched,
+// against one-by-one insertion. (A version of the insert that numbered only each run's first point
+// serially was slower and was dropped, docs/benchmarks.md session 29; this test caught its bugs.)
+TEST(VoxelGrid, BatchInsertOfScanOrderedRunsIsOneByOneInsertion) {
+    const double alpha = 0.2;
+    std::mt19937 rng(29);
+    std::uniform_int_distribution<int> run_length(1, 9), step(-1, 1), chance(0, 99);
+    std::uniform_real_distribution<double> inside(0.05, 0.95);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<Eigen::Vector3d> points;
+    Eigen::Vector3i voxel(500, -200, 3);
+    std::vector<Eigen::Vector3i> visited;
+    while (points.size() < 40000) {
+        // The next voxel: mostly a neighbour of the last one (a scan line), sometimes one met before.
+        if (chance(rng) < 10 && !visited.empty())
+            voxel = visited[std::uniform_int_distribution<std::size_t>(0, visited.size() - 1)(rng)];
+        else
+            voxel += Eigen::Vector3i(step(rng), step(rng), step(rng) * (chance(rng) < 20));
+        visited.push_back(voxel);
+        const int length = chance(rng) < 3 ? 5000 : run_length(rng);  // a few runs longer than a chunk
+        for (int i = 0; i < length; ++i) {
+            if (chance(rng) < 2) points.push_back({nan, 0, 0});  // breaks the run
+            points.push_back(alpha * (voxel.cast<double>() + Eigen::Vector3d(inside(rng), inside(rng), inside(rng))));
+        }
+    }
+    VoxelGrid oracle(alpha);
+    std::size_t nonfinite = 0;
+    for (const auto& p : points) {
+        if (p.allFinite())
+            oracle.insert(p);
+        else
+            ++nonfinite;
+    }
+    for (int threads : {1, 2, 3}) {
+        VoxelGrid grid(alpha);
+        std::size_t dropped = 0;
+        tbb::task_arena arena(threads);
+        arena.execute([&] {
+            const std::span<const Eigen::Vector3d> all(points);
+            dropped += grid.insert(all.subspan(0, 9999));  // the second batch starts inside a run
+            dropped += grid.insert(all.subspan(9999));
+        });
+        SCOPED_TRACE(threads);
+        EXPECT_EQ(dropped, nonfinite);
+        ASSERT_EQ(grid.size(), oracle.size());
+        EXPECT_EQ(grid.point_count(), oracle.point_count());
+        EXPECT_EQ(grid.touched_blocks(), oracle.touched_blocks());
+        for (std::size_t v = 0; v < grid.size(); ++v) {
+            ASSERT_EQ(grid.keys()[v], oracle.keys()[v]) << v;
+            const VoxelStats &a = grid.stats()[v], &b = oracle.stats()[v];
+            ASSERT_EQ(a.count, b.count) << v;
+            ASSERT_EQ(a.mean, b.mean) << v;
+            ASSERT_EQ(a.scatter, b.scatter) << v;
+        }
+        for (std::size_t b = 0; b < grid.index().block_count(); ++b) EXPECT_EQ(grid.occupancy(b), oracle.occupancy(b));
+    }
+}
+
 TEST(VoxelGrid, BatchInsertOutOfRangeChangesNothing) {
     VoxelGrid grid(0.2);
     const std::vector<Eigen::Vector3d> first = {{0, 0, 0}, {1, 1, 1}};
