@@ -95,6 +95,21 @@ TEST(VoxelGrid, RejectsBadInput) {
 
 }  // namespace
 
+// The same voxels (keys in the same order), statistics to the last bit and occupancy as `oracle`.
+static void expect_same_grid(const VoxelGrid& grid, const VoxelGrid& oracle) {
+    ASSERT_EQ(grid.origin(), oracle.origin());
+    ASSERT_EQ(grid.size(), oracle.size());
+    EXPECT_EQ(grid.point_count(), oracle.point_count());
+    for (std::size_t v = 0; v < grid.size(); ++v) {
+        ASSERT_EQ(grid.keys()[v], oracle.keys()[v]) << v;
+        const VoxelStats &a = grid.stats()[v], &b = oracle.stats()[v];
+        ASSERT_EQ(a.count, b.count) << v;
+        ASSERT_EQ(a.mean, b.mean) << v;  // bit-identical, not just close
+        ASSERT_EQ(a.scatter, b.scatter) << v;
+    }
+    for (std::size_t b = 0; b < grid.index().block_count(); ++b) EXPECT_EQ(grid.occupancy(b), oracle.occupancy(b));
+}
+
 // The batch insert (parallel keys, one serial numbering pass, parallel per-voxel updates) against
 // one-by-one insertion, the oracle: the same voxels in the same order and bit-identical
 // statistics, whatever the thread count, across several batches (new and existing voxels), with
@@ -124,17 +139,7 @@ TEST(VoxelGrid, BatchInsertIsOneByOneInsertionToTheLastBit) {
             dropped += grid.insert(all.subspan(all.size() - 50));
         });
         EXPECT_EQ(dropped, 3u);
-        ASSERT_EQ(grid.origin(), oracle.origin());
-        ASSERT_EQ(grid.size(), oracle.size());
-        EXPECT_EQ(grid.point_count(), oracle.point_count());
-        for (std::size_t v = 0; v < grid.size(); ++v) {
-            ASSERT_EQ(grid.keys()[v], oracle.keys()[v]) << v;
-            const VoxelStats &a = grid.stats()[v], &b = oracle.stats()[v];
-            ASSERT_EQ(a.count, b.count);
-            ASSERT_EQ(a.mean, b.mean);        // bit-identical, not just close
-            ASSERT_EQ(a.scatter, b.scatter);
-        }
-        for (std::size_t b = 0; b < grid.index().block_count(); ++b) EXPECT_EQ(grid.occupancy(b), oracle.occupancy(b));
+        expect_same_grid(grid, oracle);
     }
 }
 
@@ -185,17 +190,8 @@ TEST(VoxelGrid, BatchInsertOfScanOrderedRunsIsOneByOneInsertion) {
         });
         SCOPED_TRACE(threads);
         EXPECT_EQ(dropped, nonfinite);
-        ASSERT_EQ(grid.size(), oracle.size());
-        EXPECT_EQ(grid.point_count(), oracle.point_count());
         EXPECT_EQ(grid.touched_blocks(), oracle.touched_blocks());
-        for (std::size_t v = 0; v < grid.size(); ++v) {
-            ASSERT_EQ(grid.keys()[v], oracle.keys()[v]) << v;
-            const VoxelStats &a = grid.stats()[v], &b = oracle.stats()[v];
-            ASSERT_EQ(a.count, b.count) << v;
-            ASSERT_EQ(a.mean, b.mean) << v;
-            ASSERT_EQ(a.scatter, b.scatter) << v;
-        }
-        for (std::size_t b = 0; b < grid.index().block_count(); ++b) EXPECT_EQ(grid.occupancy(b), oracle.occupancy(b));
+        expect_same_grid(grid, oracle);
     }
 }
 
