@@ -51,11 +51,6 @@ struct Moments {
 
 class NeighbourhoodWindow {
 public:
-    /// The occupied voxels of the cube region (see above), padded to a multiple of 16 with
-    /// coordinates beyond every level. Its arrays share one allocation: a frame builds and frees
-    /// thousands of lists (with five allocations each, freeing them alone took 1.2 ms of a KITTI
-    /// frame, on one thread).
-    struct VoxelList;
     /// Memory for voxel lists that are freed together, when the arena goes: bump allocation from
     /// large chunks. The surface search builds thousands of shared lists per frame; allocating
     /// each (and freeing each, serially, at the end of the frame: ~0.5 ms of a KITTI frame) cost
@@ -71,6 +66,10 @@ public:
         std::byte* next_ = nullptr;
         std::size_t left_ = 0;
     };
+    /// The occupied voxels of the cube region (see above), padded to a multiple of 16 with
+    /// coordinates beyond every level. Its arrays share one allocation: a frame builds and frees
+    /// thousands of lists (with five allocations each, freeing them alone took 1.2 ms of a KITTI
+    /// frame, on one thread).
     struct VoxelList {
         std::size_t size = 0;  ///< entries in each array
         const PackedVoxels::Voxel** records = nullptr;
