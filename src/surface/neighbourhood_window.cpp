@@ -551,15 +551,13 @@ const NeighbourhoodWindow::VoxelList& NeighbourhoodWindow::first_list() const {
         return own_;
     }
     const VoxelList* published = shared_->list_.load(std::memory_order_acquire);
-    if (!published && arena_) {
-        // In the arena, the list's header too; a copy that loses the race stays there unused.
-        const VoxelList* mine = new (arena_->allocate(sizeof(VoxelList))) VoxelList(build_list(arena_));
+    if (!published) {
+        // In the arena (the list's header too) when there is one, else on the heap.
+        const VoxelList* mine = arena_ ? new (arena_->allocate(sizeof(VoxelList))) VoxelList(build_list(arena_)) : new VoxelList(build_list());
         if (shared_->list_.compare_exchange_strong(published, mine, std::memory_order_acq_rel, std::memory_order_acquire))
-            published = mine;  // else `published` is another thread's identical list
-    } else if (!published) {
-        auto mine = std::make_unique<const VoxelList>(build_list());
-        if (shared_->list_.compare_exchange_strong(published, mine.get(), std::memory_order_acq_rel, std::memory_order_acquire))
-            published = mine.release();  // else `published` is another thread's identical list
+            published = mine;
+        else if (!mine->in_arena())  // `published` is another thread's identical list; a copy in the arena stays there unused
+            delete mine;
     }
     list_ = published;
     return *list_;
