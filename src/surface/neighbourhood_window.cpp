@@ -506,7 +506,8 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list(ListArena* arena)
     // The region [8b - K, 8b + 6 + K]^3, in window coordinates.
     const VoxelKey first = vertex_block_ * B - first_voxel_;  // the vertex block's first vertex
     const VoxelKey l = first.array() - cube_level_, h = first.array() + (6 + cube_level_);
-    // The region's layers (one pass over the blocks), then their voxels (one allocation per array).
+    // The region's layers (one pass over the blocks), then their voxels (one allocation for all the
+    // arrays, in `arena` when given).
     // A scratch array per thread, reused from list to list: a vector per list, grown by doubling,
     // was about five allocations per list, half of a KITTI frame's (docs/benchmarks.md, session 29).
     thread_local std::vector<LayerBits> layers;
