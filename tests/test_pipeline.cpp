@@ -308,6 +308,25 @@ TEST(Pipeline, RealKittiFrameWhenAvailable) {
     EXPECT_EQ(topo.misoriented_edges, 0u);
 }
 
+// Issue 5's equality on a real frame: the fast path gives the reference path's mesh on KITTI
+// 000000 (the frame `bench` times), with the default and without the slab fallback.
+TEST(Pipeline, FastPathGivesTheReferenceMeshOnARealKittiFrame) {
+    const std::filesystem::path scan = std::filesystem::path(LIDARSURF_SHARED_DATA) / "kitti" / "000000.bin";
+    if (!std::filesystem::exists(scan)) GTEST_SKIP() << "no real KITTI frame at " << scan;
+    const PointCloud cloud = read_points(scan);
+    for (const int slab_from_level : {ReconstructionConfig{}.slab_from_level, 0}) {
+        ReconstructionConfig c;
+        c.slab_from_level = slab_from_level;
+        const std::string what = "KITTI 000000, slabs from level " + std::to_string(slab_from_level);
+        Reconstructor fast(c, Eigen::Vector3d::Zero()), reference(c, Eigen::Vector3d::Zero());
+        fast.integrate(cloud);
+        reference.integrate(cloud);
+        const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
+        ASSERT_GT(a.triangles.size(), 10000u) << what;
+        expect_same_mesh(a, b, what);
+    }
+}
+
 }  // namespace
 
 TEST(Pipeline, AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo) {

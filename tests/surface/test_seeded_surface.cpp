@@ -93,18 +93,26 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
     for (const Scan& scan : scans) {
         const PointCloud cloud = sim::simulate_scan(scan.scene, sim::SensorModel::hdl64(), scan.origin, 5);
         for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
-            ReconstructionConfig c;
-            c.mode = mode;
-            c.k = 3;
-            const std::string what = scan.name + " " + std::string(to_string(mode));
-            Reconstructor fast(c, scan.origin), reference(c, scan.origin);
-            fast.integrate(cloud);
-            reference.integrate(cloud);
-            const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
-            ASSERT_GT(a.triangles.size(), 1000u) << what;
-            expect_same_mesh(a, b, what);
-            // The fast path evaluates far fewer vertices than the full candidate set.
-            EXPECT_LT(fast.summary().candidate_vertices, reference.summary().candidate_vertices) << what;
+            // The adaptive modes also without the slab fallback (`--slab 0`: the paper's level
+            // loop, the configuration README offers where a robot needs more time margin).
+            for (const bool slabs : {true, false}) {
+                ReconstructionConfig c;
+                c.mode = mode;
+                c.k = 3;
+                if (!slabs) {
+                    if (!c.adaptive()) continue;
+                    c.slab_from_level = 0;
+                }
+                const std::string what = scan.name + " " + std::string(to_string(mode)) + (slabs ? "" : ", no slab fallback");
+                Reconstructor fast(c, scan.origin), reference(c, scan.origin);
+                fast.integrate(cloud);
+                reference.integrate(cloud);
+                const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
+                ASSERT_GT(a.triangles.size(), 1000u) << what;
+                expect_same_mesh(a, b, what);
+                // The fast path evaluates far fewer vertices than the full candidate set.
+                EXPECT_LT(fast.summary().candidate_vertices, reference.summary().candidate_vertices) << what;
+            }
         }
     }
 }
