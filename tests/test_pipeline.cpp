@@ -318,12 +318,9 @@ TEST(Pipeline, FastPathGivesTheReferenceMeshOnARealKittiFrame) {
         ReconstructionConfig c;
         c.slab_from_level = slab_from_level;
         const std::string what = "KITTI 000000, slabs from level " + std::to_string(slab_from_level);
-        Reconstructor fast(c, Eigen::Vector3d::Zero()), reference(c, Eigen::Vector3d::Zero());
-        fast.integrate(cloud);
-        reference.integrate(cloud);
-        const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
-        ASSERT_GT(a.triangles.size(), 10000u) << what;
-        expect_same_mesh(a, b, what);
+        const auto m = test::fast_and_reference(cloud, c, Eigen::Vector3d::Zero());
+        ASSERT_GT(m.fast.triangles.size(), 10000u) << what;
+        expect_same_mesh(m.fast, m.reference, what);
     }
 }
 

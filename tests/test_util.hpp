@@ -16,6 +16,7 @@
 
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/pipeline.hpp"
 
 namespace lidarsurf::test {
 
@@ -95,6 +96,24 @@ inline void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& wh
     ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
     for (std::size_t i = 0; i < a.vertices.size(); ++i) ASSERT_LT((a.vertices[i] - b.vertices[i]).norm(), 1e-6) << what;
     EXPECT_EQ(a.triangles, b.triangles) << what;
+}
+
+/// One scan reconstructed twice with the same configuration: through the fast path and through
+/// the reference path (issue 5), each with its reconstruction's summary.
+struct FastAndReference {
+    Mesh fast, reference;
+    ReconstructionSummary fast_summary, reference_summary;
+};
+inline FastAndReference fast_and_reference(const PointCloud& cloud, const ReconstructionConfig& config, const Eigen::Vector3d& origin) {
+    Reconstructor fast(config, origin), reference(config, origin);
+    fast.integrate(cloud);
+    reference.integrate(cloud);
+    FastAndReference r;
+    r.fast = fast.extract_mesh(Evaluation::Fast);
+    r.reference = reference.extract_mesh(Evaluation::Reference);
+    r.fast_summary = fast.summary();
+    r.reference_summary = reference.summary();
+    return r;
 }
 
 /// The same computation done another way (thread counts, incremental extractions): bit for bit.

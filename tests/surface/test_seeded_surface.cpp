@@ -39,6 +39,7 @@ void add_slab(TsdfField& f, int lo, int hi, double plane) {
 }
 
 using lidarsurf::test::expect_same_mesh;
+using lidarsurf::test::fast_and_reference;
 
 // A rough terrain: terraces at different heights, rocks (boxes) and trees (cylinders).
 sim::AnalyticScene offroad() {
@@ -104,14 +105,11 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshInEveryMode) {
                     c.slab_from_level = 0;
                 }
                 const std::string what = scan.name + " " + std::string(to_string(mode)) + (slabs ? "" : ", no slab fallback");
-                Reconstructor fast(c, scan.origin), reference(c, scan.origin);
-                fast.integrate(cloud);
-                reference.integrate(cloud);
-                const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
-                ASSERT_GT(a.triangles.size(), 1000u) << what;
-                expect_same_mesh(a, b, what);
+                const auto m = fast_and_reference(cloud, c, scan.origin);
+                ASSERT_GT(m.fast.triangles.size(), 1000u) << what;
+                expect_same_mesh(m.fast, m.reference, what);
                 // The fast path evaluates far fewer vertices than the full candidate set.
-                EXPECT_LT(fast.summary().candidate_vertices, reference.summary().candidate_vertices) << what;
+                EXPECT_LT(m.fast_summary.candidate_vertices, m.reference_summary.candidate_vertices) << what;
             }
         }
     }
@@ -183,12 +181,9 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshWithDilatedSeeds) {
     for (int dilation : {1, 8}) {
         ReconstructionConfig c;
         c.seed_dilation = dilation;
-        Reconstructor fast(c, origin), reference(c, origin);
-        fast.integrate(cloud);
-        reference.integrate(cloud);
-        const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
-        ASSERT_GT(a.triangles.size(), 1000u) << dilation;
-        expect_same_mesh(a, b, "seed dilation " + std::to_string(dilation));
+        const auto m = fast_and_reference(cloud, c, origin);
+        ASSERT_GT(m.fast.triangles.size(), 1000u) << dilation;
+        expect_same_mesh(m.fast, m.reference, "seed dilation " + std::to_string(dilation));
     }
 }
 
@@ -203,12 +198,9 @@ TEST(SeededSurface, FastPathGivesTheReferenceMeshOnATownFrame) {
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Constant}) {
         ReconstructionConfig c;
         c.mode = mode;
-        Reconstructor fast(c, Eigen::Vector3d::Zero()), reference(c, Eigen::Vector3d::Zero());
-        fast.integrate(cloud);
-        reference.integrate(cloud);
-        const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
-        ASSERT_GT(a.triangles.size(), 20000u);
-        expect_same_mesh(a, b, std::string("town ") + std::string(to_string(mode)));
+        const auto m = fast_and_reference(cloud, c, Eigen::Vector3d::Zero());
+        ASSERT_GT(m.fast.triangles.size(), 20000u);
+        expect_same_mesh(m.fast, m.reference, std::string("town ") + std::string(to_string(mode)));
     }
 }
 
@@ -219,13 +211,10 @@ TEST(SeededSurface, DataOnALatticePlaneIsStillMeshed) {
     for (int i = 0; i < 60; ++i)
         for (int j = 0; j < 60; ++j) cloud.points.emplace_back(0.05 * i, 0.05 * j, -1.0);
     ReconstructionConfig c;
-    Reconstructor fast(c, Eigen::Vector3d::Zero()), reference(c, Eigen::Vector3d::Zero());
-    fast.integrate(cloud);
-    reference.integrate(cloud);
-    const Mesh a = fast.extract_mesh(Evaluation::Fast), b = reference.extract_mesh(Evaluation::Reference);
-    ASSERT_GT(a.triangles.size(), 100u);
-    expect_same_mesh(a, b, "lattice plane");
-    for (const auto& v : a.vertices) EXPECT_NEAR(v.z(), -1.0, 1e-6);
+    const auto m = fast_and_reference(cloud, c, Eigen::Vector3d::Zero());
+    ASSERT_GT(m.fast.triangles.size(), 100u);
+    expect_same_mesh(m.fast, m.reference, "lattice plane");
+    for (const auto& v : m.fast.vertices) EXPECT_NEAR(v.z(), -1.0, 1e-6);
 }
 
 // The seed wave evaluates each seed cube's all-even corner first and the other corners only for
