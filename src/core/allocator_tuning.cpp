@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <string>
 
 // Sanitizers replace malloc: glibc's settings would do nothing there.
 #if defined(__GLIBC__) && defined(__linux__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
@@ -14,6 +15,28 @@
 #endif
 
 namespace lidarsurf {
+
+#if defined(LIDARSURF_GLIBC_MALLOC)
+namespace {
+
+constexpr std::size_t kMmapThreshold = std::size_t{64} << 20;
+
+// The lowest address of the main heap (the mappings /proc/self/maps names "[heap]"), or 0 when
+// there is none or it cannot be read. (Not sbrk(0) minus mallinfo2's arena: that sums every
+// arena, the worker threads' too, and reached below the heap into other mappings.)
+std::uintptr_t main_heap_start() {
+    std::ifstream maps("/proc/self/maps");
+    std::uintptr_t lowest = 0;
+    for (std::string line; std::getline(maps, line);) {
+        if (line.size() < 6 || line.compare(line.size() - 6, 6, "[heap]") != 0) continue;
+        const std::uintptr_t lo = std::strtoull(line.c_str(), nullptr, 16);
+        if (lo > 0 && (lowest == 0 || lo < lowest)) lowest = lo;
+    }
+    return lowest;
+}
+
+}  // namespace
+#endif
 
 std::string AllocatorTuning::describe() const {
     if (!keeps_freed_memory && !huge_pages) return "default allocator";
@@ -38,7 +61,7 @@ AllocatorTuning tune_allocator() {
     // Blocks below 64 MiB come from the heap (not mapped and unmapped one by one), and the heap's
     // top is given back only beyond 128 MiB: ~300 -> ~36 page faults per KITTI frame, peak memory
     // unchanged (docs/benchmarks.md, session 23).
-    mallopt(M_MMAP_THRESHOLD, 64 << 20);
+    mallopt(M_MMAP_THRESHOLD, static_cast<int>(kMmapThreshold));
     mallopt(M_TRIM_THRESHOLD, 128 << 20);
     done.keeps_freed_memory = true;
 
@@ -55,21 +78,26 @@ AllocatorTuning tune_allocator() {
     // also keeps that much free at the heap's top when it trims it.
     constexpr std::size_t kTopPad = std::size_t{64} << 20;
     mallopt(M_TOP_PAD, static_cast<int>(kTopPad));
-    // Make the heap grow now, by more than its free top (mallinfo2's keepcost) unless that holds
-    // half the padding already: the growth then brings the padding.
-    const std::size_t top = mallinfo2().keepcost;
-    if (top < kTopPad / 2) {
+    // Make the heap grow now, unless its free top (mallinfo2's keepcost) holds half the padding
+    // already: the growth then brings the padding. The block asked for is larger than all the free
+    // memory glibc holds (fordblks, the top and the other arenas included), so that no free chunk
+    // inside the heap can serve it (a fragmented heap did: it then grew later, unadvised), and
+    // below the mmap threshold, so that it comes from the heap; with more free memory than that,
+    // the heap is left as it is.
+    const struct mallinfo2 before = mallinfo2();
+    const std::size_t grow_by = before.fordblks + (std::size_t{1} << 20);
+    if (before.keepcost < kTopPad / 2 && grow_by < kMmapThreshold) {
         // (volatile: a compiler may drop a malloc whose block is only freed)
-        void* volatile grow = std::malloc(top + (std::size_t{1} << 20));
+        void* volatile grow = std::malloc(grow_by);
         std::free(grow);  // kept: below the trim threshold
     }
-    // Advise the main heap, [end - arena, end), from its first 2 MiB boundary: pages not touched
-    // yet are then faulted in as 2 MiB pages (those touched already stay 4 KiB ones).
+    // Advise the main heap, from its first 2 MiB boundary to its end: pages not touched yet are
+    // then faulted in as 2 MiB pages (those touched already stay 4 KiB ones).
+    const std::uintptr_t first = main_heap_start();
     const auto end = reinterpret_cast<std::uintptr_t>(sbrk(0));
-    const std::uintptr_t arena = mallinfo2().arena;
     constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
-    const std::uintptr_t start = (end - arena + kHuge - 1) & ~(kHuge - 1);
-    if (arena > 0 && end > start && madvise(reinterpret_cast<void*>(start), end - start, MADV_HUGEPAGE) == 0) done.huge_pages = true;
+    const std::uintptr_t start = (first + kHuge - 1) & ~(kHuge - 1);
+    if (first > 0 && end > start && madvise(reinterpret_cast<void*>(start), end - start, MADV_HUGEPAGE) == 0) done.huge_pages = true;
 #endif
     return done;
 }
