@@ -117,6 +117,18 @@ double resident_mib() {
     return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1 << 20);
 }
 
+// Whether the last byte of a fresh, touched block of `mib` MiB lies in a mapping advised for huge
+// pages ("hg" in its VmFlags); its VmFlags in `flags`.
+bool fresh_block_is_advised(std::size_t mib, std::string& flags) {
+    void* block = std::malloc(mib << 20);
+    if (block == nullptr) return false;
+    std::memset(block, 1, mib << 20);
+    const Mapping m = mapping_of(static_cast<char*>(block) + (mib << 20) - 1);
+    std::free(block);
+    flags = m.flags;
+    return m.flags.find(" hg ") != std::string::npos;
+}
+
 // release_free_memory() gives back what the tuned allocator keeps (up to the padding at the heap's
 // top, and the freed blocks below the trim threshold): after 96 MiB of blocks are touched and
 // freed, resident memory drops by most of it; the heap is advised again for what comes next.
@@ -137,24 +149,9 @@ TEST(AllocatorTuning, ReleaseGivesFreedMemoryBackAndAdvisesTheHeapAgain) {
     EXPECT_LT(released, kept - 48.0) << "resident " << kept << " MiB before, " << released << " after";
     EXPECT_EQ(again.huge_pages, tuned.huge_pages);
     if (again.huge_pages && !std::getenv("GLIBC_TUNABLES")) {
-        void* block = std::malloc(std::size_t{16} << 20);
-        std::memset(block, 1, std::size_t{16} << 20);
-        const Mapping m = mapping_of(static_cast<char*>(block) + (std::size_t{16} << 20) - 1);
-        std::free(block);
-        EXPECT_NE(m.flags.find(" hg "), std::string::npos) << "VmFlags" << m.flags;
+        std::string flags;
+        EXPECT_TRUE(fresh_block_is_advised(16, flags)) << "VmFlags" << flags;
     }
-}
-
-// Whether the last byte of a fresh, touched block of `mib` MiB lies in a mapping advised for huge
-// pages ("hg" in its VmFlags); its VmFlags in `flags`.
-bool fresh_block_is_advised(std::size_t mib, std::string& flags) {
-    void* block = std::malloc(mib << 20);
-    if (block == nullptr) return false;
-    std::memset(block, 1, mib << 20);
-    const Mapping m = mapping_of(static_cast<char*>(block) + (mib << 20) - 1);
-    std::free(block);
-    flags = m.flags;
-    return m.flags.find(" hg ") != std::string::npos;
 }
 
 // The cases where tune_allocator() advises the heap by its own means (glibc on Linux, no
