@@ -20,6 +20,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "file_roles.hpp"
+#include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
@@ -396,7 +398,7 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o) {
     b->add_flag("--no-reference", o.no_reference, "Skip the reference path");
     b->add_flag("--no-imls", o.no_imls, "Skip IMLS");
     b->add_flag("--no-scaling", o.no_scaling, "Skip the size and thread scaling tables and the incremental re-meshing table");
-    b->add_option("--json", o.json, "Also write every row (all run times) as JSON");
+    b->add_option("--json", o.json, "Also write every row (all run times) as JSON")->each([&o](const std::string&) { o.json_given = true; });
     add_reconstruct_options(b, o.reconstruct);
     b->footer("Example:\n  lidarsurf bench                      # simulated town frames\n"
               "  lidarsurf bench ../shared/data/kitti/*.bin --repeat 11");
@@ -409,15 +411,27 @@ int run_bench(const BenchOptions& o) {
     if (o.frames < 1 || o.frames > 100) throw InvalidArgument("--frames must be in [1, 100]");
     const Method method = resolve_method(o.reconstruct);
     const int threads = method.config.threads;  // 0 = all cores
+    if (!o.no_imls && !method.imls) {
+        try {
+            method.imls_config.validate();
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument(std::string("the IMLS rows: ") + e.what() + " (or skip them with --no-imls)");
+        }
+    }
+    FileRoles files;
+    for (const std::string& s : o.scans) files.input(s);
+    if (o.json_given || !o.json.empty()) files.output(o.json, "--json");
+    files.check();
 
     Inputs in;
-    const fs::path tmp = fs::temp_directory_path() / ("lidarsurf-bench-" + std::to_string(::getpid()));
+    // Scratch files (simulated and subsampled scans): removed at the end, on an error or a signal.
+    const AtomicDirectory scratch(fs::temp_directory_path() / "lidarsurf-bench");
+    const fs::path& tmp = scratch.path();
     if (o.scans.empty()) {
         const ReconstructOptions defaults;
         if (o.reconstruct.format != defaults.format || o.reconstruct.bin_fields != defaults.bin_fields)
             throw InvalidArgument("--format and --bin-fields describe the scans you pass; without scans, bench reads its own "
                                   "(simulated town frames and the KITTI frames beside the source tree)");
-        fs::create_directories(tmp);
         std::fprintf(stderr, "bench: simulating %d town frames and 4 resolutions in %s\n", o.frames, tmp.c_str());
         in = simulate_inputs(tmp, o.frames);
         const std::size_t simulated = in.frames.size();
@@ -439,11 +453,7 @@ int run_bench(const BenchOptions& o) {
             in.frames.push_back({s, fs::path(s).filename().string(), method.read});
         }
     }
-    auto cleanup = [&] {
-        std::error_code ec;
-        fs::remove_all(tmp, ec);
-    };
-    try {
+    {
         const CpuTimes start = cpu_times();
         std::vector<Row> rows, size_rows, thread_rows, sector_rows;
         std::string sector_scan;  // the label of the scan the incremental table splits
@@ -455,7 +465,6 @@ int run_bench(const BenchOptions& o) {
         }
         if (!o.no_scaling) {
             if (in.sizes.empty()) {  // the user's scans
-                fs::create_directories(tmp);
                 add_subsampled_sizes(in, tmp);
             }
             for (const Input& scan : in.sizes) size_rows.push_back(run_row(scan, Path::Fast, method, threads, o.repeat));
@@ -509,7 +518,7 @@ int run_bench(const BenchOptions& o) {
                         sector_scan.c_str());
             std::fputs(format_rows(sector_rows, true).c_str(), stdout);
         }
-        if (!o.json.empty()) {
+        if (o.json_given || !o.json.empty()) {
             nlohmann::json j;
             j["machine"] = machine;
             for (const char* key : {"rows", "sizes", "threads", "sectors"}) j[key] = nlohmann::json::array();
@@ -519,11 +528,7 @@ int run_bench(const BenchOptions& o) {
             for (const Row& r : thread_rows) j["threads"].push_back(to_json(r));
             write_text(o.json, j.dump(2) + "\n");
         }
-    } catch (...) {
-        cleanup();
-        throw;
     }
-    cleanup();
     return 0;
 }
 

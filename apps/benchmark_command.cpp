@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "file_roles.hpp"
 #include "lidarsurf/eval/benchmark.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
@@ -159,9 +160,14 @@ int run_benchmark(const BenchmarkOptions& o) {
         frames.push_back(i);
     }
     const fs::path out = o.out.empty() ? seq.dir / "benchmark" : fs::path(o.out);
+    FileRoles files;
+    files.input_sequence(seq.dir);
+    if (!o.peers.empty()) files.input_tree(o.peers);
+    for (const char* name : {"table.txt", "results.csv", "results.json"}) files.output(out / name, "--out");
     std::error_code ec_fs;
     fs::create_directories(out, ec_fs);
     if (ec_fs) throw IoError(out.string() + ": cannot create the directory (" + ec_fs.message() + ")");
+    files.check();
 
     const std::vector<ExternalMethod> peers = external_methods(o.peers);
     // The true surface: the scene mesh and the poses that place it in each sensor frame.

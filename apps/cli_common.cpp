@@ -2,43 +2,41 @@
 #include "cli_common.hpp"
 #include "lidarsurf/core/simd.hpp"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cctype>
 #include <fstream>
 #include <sstream>
 
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/eval/benchmark.hpp"
+#include "lidarsurf/core/format_value.hpp"
 
 namespace fs = std::filesystem;
 
 namespace lidarsurf::cli {
 
 Eigen::Vector3d parse_vec3(const std::string& text, const char* what) {
+    const std::string shown = text.substr(0, 80);
+    std::vector<std::string> items;
     std::stringstream ss(text);
+    for (std::string item; std::getline(ss, item, ',');) items.push_back(item);
+    if (!text.empty() && text.back() == ',') items.emplace_back();  // "1,2,3," has a fourth, empty value
+    if (items.size() != 3)
+        throw InvalidArgument(std::string(what) + " must be three numbers x,y,z (got " + format_value(items.size()) + " values in '" + shown + "')");
     Eigen::Vector3d v;
-    std::string item;
-    int i = 0;
-    while (std::getline(ss, item, ',')) {
-        if (i == 3) break;
+    for (int i = 0; i < 3; ++i) {
         try {
             std::size_t used = 0;
-            v[i] = std::stod(item, &used);
-            if (used != item.size()) throw std::invalid_argument(item);
+            v[i] = std::stod(items[static_cast<std::size_t>(i)], &used);
+            if (used != items[static_cast<std::size_t>(i)].size()) throw std::invalid_argument(items[static_cast<std::size_t>(i)]);
         } catch (const std::exception&) {
-            throw InvalidArgument(std::string(what) + " must be three numbers x,y,z (got '" + text + "')");
+            throw InvalidArgument(std::string(what) + " must be three numbers x,y,z (got '" + shown + "')");
         }
-        ++i;
     }
-    if (i != 3 || ss.rdbuf()->in_avail() > 0 || !v.allFinite())
-        throw InvalidArgument(std::string(what) + " must be three finite numbers x,y,z (got '" + text + "')");
+    if (!v.allFinite()) throw InvalidArgument(std::string(what) + " must be three finite numbers x,y,z (got '" + shown + "')");
     return v;
-}
-
-void check_output(const fs::path& input, const fs::path& output) {
-    std::error_code ec;
-    if (fs::exists(output, ec) && fs::equivalent(input, output, ec))
-        throw InvalidArgument("output '" + output.string() + "' is the input file; refusing to overwrite it");
-    AtomicFile probe(output);  // throws IoError now rather than after the work; never committed
 }
 
 // 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget.
@@ -106,6 +104,11 @@ Method resolve_method(const ReconstructOptions& o) {
     m.config.validate();
     if (o.method == "imls") m.imls = true;
     else if (o.method != "paper") throw InvalidArgument("unknown method '" + o.method + "' (expected paper or imls)");
+    m.sensor = parse_vec3(o.origin, "--origin");
+    m.read.format = parse_point_format(o.format);
+    m.read.bin_fields = o.bin_fields;
+    m.read.max_bytes = static_cast<std::size_t>(m.config.max_memory_mb * 1048576.0);  // the input alone must fit the budget
+    if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
     m.imls_config = ImlsConfig::matching(m.config);
     if (o.imls_radius) {
         m.imls_config.radius = o.imls.radius;
@@ -114,11 +117,7 @@ Method resolve_method(const ReconstructOptions& o) {
     if (o.imls_k) m.imls_config.normal_k = o.imls.normal_k;
     if (o.imls_h) m.imls_config.bandwidth = o.imls.bandwidth;
     if (o.imls_truncation) m.imls_config.truncation_voxels = o.imls.truncation_voxels;
-    m.imls_config.validate();
-    m.sensor = parse_vec3(o.origin, "--origin");
-    m.read.format = parse_point_format(o.format);
-    m.read.bin_fields = o.bin_fields;
-    if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
+    if (m.imls) m.imls_config.validate();  // checked where IMLS runs: a paper run does not fail on IMLS's limits
     return m;
 }
 
@@ -130,8 +129,15 @@ Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary) 
     Mesh mesh = run_benchmark_method(row, cloud, m.sensor, &summary);
     if (mesh.empty())
         throw InvalidInput("the reconstruction produced no triangle (" + summary + "); the cloud may be too sparse for n_min=" +
-                           std::to_string(m.config.n_min) + " at voxel size " + std::to_string(m.config.voxel_size));
+                           format_value(m.config.n_min) + " at voxel size " + format_value(m.config.voxel_size));
     return mesh;
+}
+
+std::FILE* report_stream(const fs::path& output) {
+    struct stat out {}, std_out {};
+    const bool same = ::stat(output.c_str(), &out) == 0 && ::fstat(STDOUT_FILENO, &std_out) == 0 && out.st_dev == std_out.st_dev &&
+                      out.st_ino == std_out.st_ino;
+    return same ? stderr : stdout;
 }
 
 double ms_since(std::chrono::steady_clock::time_point t0) {

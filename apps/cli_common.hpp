@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the lidarsurf subcommands (apps/ only; the library never prints or exits).
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -16,9 +17,6 @@ namespace lidarsurf::cli {
 
 /// "x,y,z" -> vector; InvalidArgument naming `what` otherwise.
 Eigen::Vector3d parse_vec3(const std::string& text, const char* what);
-/// Before any work: InvalidArgument if `output` exists and is the same file as `input`; IoError if
-/// `output` cannot be written (probed with a temporary beside it, removed at once).
-void check_output(const std::filesystem::path& input, const std::filesystem::path& output);
 /// 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget; 1: anything else.
 int exit_code(const Error& e);
 
@@ -51,6 +49,10 @@ std::string method_name(const Method& m);
 /// Runs the chosen method; `summary` receives one line of counts and times. InvalidInput when
 /// the reconstruction is empty.
 Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary);
+
+/// Where a command's report goes: stderr when `output` is the standard output itself
+/// (`-o /dev/stdout`), so the report does not end up inside the file written there; stdout otherwise.
+std::FILE* report_stream(const std::filesystem::path& output);
 
 double ms_since(std::chrono::steady_clock::time_point t0);
 /// Lower-case extension with the dot (".ply"), "" when none.

@@ -13,6 +13,7 @@ namespace lidarsurf::cli {
 
 struct SimulateOptions {
     std::string scene = "town", sensor = "hdl64", output, gt, from, to;
+    bool gt_given = false;  // --gt given, even with an empty name (an error)
     int frames = 100, gt_beams = 316, moving_cars = 3;
     double length = 240.0;
     std::uint64_t seed = 1;
@@ -41,6 +42,7 @@ int run_benchmark(const BenchmarkOptions& o);
 struct BenchOptions {
     std::vector<std::string> scans;
     std::string json;
+    bool json_given = false;  // --json given, even with an empty name (an error)
     int repeat = 7, slow_repeat = 3, frames = 3;
     bool no_reference = false, no_imls = false, no_scaling = false;
     ReconstructOptions reconstruct;  // the configuration timed (paper defaults)

@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "commands.hpp"
+#include "file_roles.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 
@@ -58,7 +59,12 @@ int run_fuse(const FuseOptions& o) {
     for (std::size_t i = first; i < available && (o.frames == 0 || frames.size() < static_cast<std::size_t>(o.frames));
          i += static_cast<std::size_t>(o.step))
         frames.push_back(i);
-    check_output(seq.poses(), o.output);
+    FileRoles files;
+    files.input_sequence(seq.dir);
+    if (!o.calib.empty()) files.input(o.calib);
+    files.output(o.output, "-o");
+    files.check();
+    std::FILE* const report = report_stream(o.output);
 
     Reconstructor rec(m.config, poses[frames.front()] * m.sensor);
     Mesh mesh;
@@ -77,17 +83,17 @@ int run_fuse(const FuseOptions& o) {
             mesh = rec.extract_mesh();
             fresh = true;
             const ReconstructionSummary& s = rec.summary();
-            std::printf("frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
+            std::fprintf(report, "frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
                         KittiSequence::frame_name(i).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles,
                         1e3 * s.seconds_tsdf, 1e3 * s.seconds_mesh);
-            std::fflush(stdout);
+            std::fflush(report);
         }
     }
     if (!fresh) mesh = rec.extract_mesh();
     if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
     const auto t0 = std::chrono::steady_clock::now();
     write_mesh(mesh, o.output, format);
-    std::printf("%s: %zu frames fused (%s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
+    std::fprintf(report, "%s: %zu frames fused (%s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
                 method_name(m).c_str(), rec.summary().to_string().c_str(), read_ms, ms_since(t0), o.output.c_str());
     return 0;
 }

@@ -15,6 +15,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "file_roles.hpp"
+#include "interrupt.hpp"
 
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/allocator_tuning.hpp"
@@ -43,7 +45,10 @@ int run_reconstruct(const std::string& input, const std::string& output, const s
                     const ReconstructOptions& o) {
     const Method m = resolve_method(o);
     const MeshFormat mesh_format = parse_mesh_format(mesh_format_name);
-    check_output(input, output);
+    FileRoles files;
+    files.input(input);
+    files.output(output, "-o");
+    files.check();
 
     auto t0 = std::chrono::steady_clock::now();
     const PointCloud cloud = read_points(input, m.read);
@@ -52,7 +57,7 @@ int run_reconstruct(const std::string& input, const std::string& output, const s
     const Mesh mesh = run_method(m, cloud, summary);
     t0 = std::chrono::steady_clock::now();
     write_mesh(mesh, output, mesh_format);
-    std::printf("%s: %s; %s; read %.1f ms, write %.1f ms -> %s\n", input.c_str(), method_name(m).c_str(), summary.c_str(), read_ms,
+    std::fprintf(report_stream(output), "%s: %s; %s; read %.1f ms, write %.1f ms -> %s\n", input.c_str(), method_name(m).c_str(), summary.c_str(), read_ms,
                 ms_since(t0), output.c_str());
     return 0;
 }
@@ -64,7 +69,10 @@ struct EvaluateOptions {
     double holdout = 0, gt_spacing = 0.02;
     std::uint64_t seed = 1;
     EvaluationConfig eval;
+    bool json_given = false, mesh_out_given = false;  // an option given with an empty name is an error
 };
+
+bool eo_given_json(const EvaluateOptions& o) { return o.json_given || !o.json.empty(); }
 
 // Ground truth as points: a point file, or a mesh (.obj, or .ply with faces) sampled densely.
 std::vector<Eigen::Vector3d> read_ground_truth(const std::string& path, const EvaluateOptions& o) {
@@ -87,8 +95,11 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     EvaluationConfig& ec = o.eval;
     ec.seed = o.seed;
     if (!std::isfinite(o.gt_spacing) || o.gt_spacing <= 0) throw InvalidArgument("--gt-spacing must be finite and > 0");
-    for (const std::string& in : o.inputs)
-        if (!o.json.empty()) check_output(in, o.json);
+    FileRoles files;
+    for (const std::string& in : o.inputs) files.input(in);
+    if (eo_given_json(o)) files.output(o.json, "--json");
+    if (!o.mesh_out.empty() || o.mesh_out_given) files.output(o.mesh_out, "--mesh-out");
+    files.check();
     Mesh mesh;
     std::vector<Eigen::Vector3d> gt;
     std::string header;
@@ -98,7 +109,6 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
         ec.origin = m.sensor;
         ec.threads = m.config.threads;
         ec.validate();
-        if (!o.mesh_out.empty()) check_output(o.inputs[0], o.mesh_out);
         PointCloud cloud = read_points(o.inputs[0], m.read);
         const std::size_t dropped = drop_non_finite(cloud);
         const HoldoutSplit split = split_holdout(cloud, o.holdout, o.seed);
@@ -109,7 +119,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
         std::snprintf(buf, sizeof buf, "hold-out %.3g (seed %llu): %zu points reconstructed, %zu held out, %zu non-finite dropped",
                       o.holdout, static_cast<unsigned long long>(o.seed), split.kept.points.size(), gt.size(), dropped);
         header = o.inputs[0] + ": " + method_name(m) + "; " + buf + "\n  " + summary + "\n";
-        if (!o.mesh_out.empty()) write_mesh(mesh, o.mesh_out);
+        if (o.mesh_out_given) write_mesh(mesh, o.mesh_out);
     } else {
         if (o.inputs.size() != 2)
             throw InvalidArgument("evaluate takes MESH GT (or --holdout FRACTION SCAN); got " + std::to_string(o.inputs.size()) + " input(s)");
@@ -122,13 +132,39 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     }
     const EvaluationResult result = evaluate(mesh, gt, ec);
     std::printf("%s%s", header.c_str(), format_table(result).c_str());
-    if (!o.json.empty()) write_text(o.json, to_json(result));
+    if (eo_given_json(o)) write_text(o.json, to_json(result));
     return 0;
 }
 
 }  // namespace
 
+// A message as the terminal should show it: bytes that a file or an argument put into it and that
+// a terminal would act on (escape sequences, carriage returns, other control bytes) are printed
+// as \xNN.
+std::string printable(std::string_view text) {
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text) {
+        const auto u = static_cast<unsigned char>(c);
+        if (u < 0x20 || u == 0x7f) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", u);
+            out += buf;
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
+int fail(const char* kind, std::string_view message, int code) {
+    if (interrupted()) wait_for_exit();  // the signal thread removed the outputs and ends the process
+    std::fprintf(stderr, "lidarsurf: %s: %s\n", kind, printable(message).c_str());
+    return code;
+}
+
 int main(int argc, char** argv) {
+    handle_interrupts();  // before any other thread exists
     // Frame after frame (fuse, bench): freed memory kept for reuse, the heap in huge pages
     // (core/allocator_tuning.hpp).
     const AllocatorTuning allocator = tune_allocator();
@@ -169,8 +205,10 @@ int main(int argc, char** argv) {
     ev->add_option("--gt-spacing", eo.gt_spacing, "Sample spacing of a ground-truth mesh, metres")->capture_default_str();
     ev->add_option("--gt-format", eo.gt_format, "Ground-truth format: auto | bin | ply | pcd | xyz")->capture_default_str();
     ev->add_option("--gt-bin-fields", eo.gt_bin_fields, "float32 values per point in a .bin ground truth")->capture_default_str();
-    ev->add_option("--json", eo.json, "Also write the metrics as JSON to this file");
-    ev->add_option("--mesh-out", eo.mesh_out, "With --holdout: write the reconstructed mesh here");
+    ev->add_option("--json", eo.json, "Also write the metrics as JSON to this file")->each([&eo](const std::string&) { eo.json_given = true; });
+    ev->add_option("--mesh-out", eo.mesh_out, "With --holdout: write the reconstructed mesh here")->each([&eo](const std::string&) {
+        eo.mesh_out_given = true;
+    });
     add_reconstruct_options(ev, ro);
 
     SimulateOptions so;
@@ -202,14 +240,13 @@ int main(int argc, char** argv) {
         }
         if (*fu) return run_fuse(fo);
     } catch (const Error& e) {
-        std::fprintf(stderr, "lidarsurf: error: %s\n", e.what());
-        return exit_code(e);
+        return fail("error", e.what(), exit_code(e));
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "lidarsurf: error: out of memory\n");
-        return 1;
+        return fail("error", "out of memory: the system refused an allocation; use a larger voxel size, split the input, or set --max-memory", 5);
+    } catch (const std::length_error& e) {
+        return fail("error", std::string("out of memory: a size beyond what can be allocated (") + e.what() + ")", 5);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "lidarsurf: internal error: %s\n", e.what());
-        return 1;
+        return fail("internal error", e.what(), 1);
     }
     return 1;
 }

@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "commands.hpp"
+#include "file_roles.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/png_writer.hpp"
 #include "lidarsurf/viz/render.hpp"
@@ -35,7 +36,10 @@ int run_render(const RenderOptions& o) {
     if (!o.target.empty()) cfg.target = parse_vec3(o.target, "--target");
     cfg.validate();
     if (extension_of(o.output) != ".png") throw InvalidArgument("render writes PNG: give -o a .png file");
-    check_output(o.input, o.output);
+    FileRoles files;
+    files.input(o.input);
+    files.output(o.output, "-o");
+    files.check();
     const auto t0 = std::chrono::steady_clock::now();
     const Mesh mesh = read_mesh(o.input);
     const Image img = viz::render(mesh, cfg);

@@ -4,6 +4,8 @@
 #include <filesystem>
 
 #include "commands.hpp"
+#include "file_roles.hpp"
+#include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_writer.hpp"
@@ -47,8 +49,24 @@ sim::World load_world(const SimulateOptions& o) {
     return sim::make_world(sc);
 }
 
+// The files the command reads (a scene mesh, a sensor file) and writes, checked before any work.
+void check_files(const SimulateOptions& o, bool single) {
+    FileRoles files;
+    const std::string scene_ext = extension_of(o.scene);
+    if (scene_ext == ".ply" || scene_ext == ".obj") files.input(o.scene);
+    if (extension_of(o.sensor) == ".json") files.input(o.sensor);
+    if (single) {
+        files.output(o.output, "-o");
+        if (o.gt_given || !o.gt.empty()) files.output(o.gt, "--gt");
+    } else {
+        files.output_directory(o.output, "-o");
+    }
+    files.check();
+}
+
 int simulate_demo(const SimulateOptions& o) {
     if (!is_point_file(o.output)) throw InvalidArgument("the demo scene writes one scan: give -o a point file (.bin, .ply, ...)");
+    check_files(o, true);
     const auto world = sim::AnalyticScene::demo();
     const sim::SensorModel sensor = load_sensor(o.sensor);
     const PointCloud cloud = sim::simulate_scan(world, sensor, Eigen::Vector3d::Zero(), o.seed);
@@ -82,7 +100,9 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
     sc->add_option("--sensor", o.sensor, "hdl64 | vlp16 | hdl32 | os1-128 | gt316 | a .json sensor file")->capture_default_str();
     sc->add_option("--frames", o.frames, "Frames, equi-sampled along the drive")->capture_default_str();
     sc->add_option("-o,--output", o.output, "Output directory (KITTI layout), or one point file")->required();
-    sc->add_option("--gt", o.gt, "With a point-file output: also write its ground-truth scan here");
+    sc->add_option("--gt", o.gt, "With a point-file output: also write its ground-truth scan here")->each([&o](const std::string&) {
+        o.gt_given = true;
+    });
     sc->add_option("--gt-beams", o.gt_beams, "Beams of the ground-truth sensor (0 = none)")->capture_default_str();
     sc->add_option("--seed", o.seed, "Scene and noise seed")->capture_default_str();
     sc->add_option("--length", o.length, "Street / track length in metres (town, offroad)")->capture_default_str();
@@ -104,6 +124,7 @@ int run_simulate(const SimulateOptions& o) {
     if (!single && !o.gt.empty()) throw InvalidArgument("--gt goes with a point-file output; a directory gets gt/ itself");
     if (single && o.gt.empty()) cfg.gt_beams = 0;
     cfg.validate();
+    check_files(o, single);
     const sim::Simulator simulator(load_world(o), cfg);
 
     if (single) {
@@ -115,7 +136,9 @@ int run_simulate(const SimulateOptions& o) {
                     o.gt.empty() ? "" : ", ground truth -> ", o.gt.c_str());
         return 0;
     }
-    const KittiSequence seq{o.output};
+    // The sequence is written under a temporary directory and put in place whole at the end.
+    AtomicDirectory out(o.output);
+    const KittiSequence seq{out.path()};
     std::error_code ec;
     for (const fs::path& d : {seq.dir / "velodyne", seq.dir / "gt", seq.dir / "objects"}) {
         fs::create_directories(d, ec);
@@ -137,6 +160,7 @@ int run_simulate(const SimulateOptions& o) {
             std::fprintf(stderr, "simulate: frame %zu/%zu (%.1f s)\n", i + 1, simulator.frame_count(), ms_since(t0) / 1e3);
     }
     write_poses(poses, seq.poses());
+    out.commit();
     std::printf("simulated %zu frames of scene %s with %s (%.0f points per frame, seed %llu, %zu scene triangles) -> %s\n",
                 simulator.frame_count(), o.scene.c_str(), cfg.sensor.name.c_str(),
                 static_cast<double>(points) / static_cast<double>(simulator.frame_count()), static_cast<unsigned long long>(o.seed),

@@ -33,6 +33,8 @@ for fields, tag in ((4, b"\x01"), (5, b"\x02")):
 # PLY points: ascii, binary little and big endian, with extra properties.
 hdr = "ply\nformat {} 1.0\ncomment seed\nelement vertex {}\nproperty float x\nproperty float y\nproperty double z\nproperty uchar level\nend_header\n"
 put("fuzz_ply_points", "ascii.ply", hdr.format("ascii", len(PTS)) + "".join(f"{x} {y} {z} 3\n" for x, y, z in PTS))
+# One ascii record a line: a short row and a long one.
+put("fuzz_ply_points", "ascii_rows.ply", hdr.format("ascii", len(PTS)) + "".join(f"{x} {y} {z}{'' if i == 1 else ' 3 7' if i == 2 else ' 3'}\n" for i, (x, y, z) in enumerate(PTS)))
 for fmt, e in (("binary_little_endian", "<"), ("binary_big_endian", ">")):
     put("fuzz_ply_points", fmt + ".ply", hdr.format(fmt, len(PTS)).encode() + b"".join(struct.pack(e + "ffdB", *p, 3) for p in PTS))
 
@@ -50,6 +52,11 @@ put("fuzz_pcd_points", "compressed.pcd", pcd_header("binary_compressed") + struc
 # XYZ / CSV text.
 put("fuzz_text_points", "points.xyz", "".join(f"{x} {y} {z}\n" for x, y, z in PTS))
 put("fuzz_text_points", "points.csv", "x,y,z,intensity\n" + "".join(f"{x},{y},{z},1\n" for x, y, z in PTS))
+# A decimal-comma spreadsheet export with a byte-order mark and quoted names.
+put("fuzz_text_points", "decimal_comma.csv", "\ufeff\"x\";\"y\";\"z\"\n" + "".join(f"{x};{y};{z}\n".replace(".", ",") for x, y, z in PTS))
+# PCD sizes whose product wraps around 2^64 (2^45 + 1 records of 2^19 bytes).
+put("fuzz_pcd_points", "wrap.pcd", b"VERSION 0.7\nFIELDS x y z pad\nSIZE 8 8 8 8\nTYPE F F F F\nCOUNT 1 1 1 65533\n"
+    b"WIDTH 35184372088833\nHEIGHT 1\nPOINTS 35184372088833\nDATA binary_compressed\n" + struct.pack("<II", 16, 1 << 19) + bytes(16))
 
 # KITTI poses: identity, then a yaw of 30 degrees with a translation.
 c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)

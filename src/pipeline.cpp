@@ -13,6 +13,7 @@
 #include "lidarsurf/mesh/mesh_filter.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
+#include "lidarsurf/core/format_value.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -67,13 +68,26 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
         const std::size_t end = std::min(points.size(), begin + kChunk);
-        summary_.points_dropped += arena.execute([&] { return grid_.insert(points.subspan(begin, end - begin), seen_from); });
+        const std::span<const Eigen::Vector3d> chunk = points.subspan(begin, end - begin);
+        // Near the budget, the chunk's growth is counted first: a chunk that would not fit is
+        // refused before the grid changes, so later batches that fit are still taken.
+        if (static_cast<double>(grid_.memory_bytes_after(chunk.size(), chunk.size(), chunk.size())) > budget_bytes()) {
+            const auto [new_voxels, new_blocks] = grid_.count_new(chunk);
+            const double after = static_cast<double>(grid_.memory_bytes_after(new_voxels, new_blocks, chunk.size()));
+            if (after > budget_bytes()) {
+                const double growth = (after - static_cast<double>(before)) * static_cast<double>(points.size()) / static_cast<double>(end);
+                throw ResourceLimit(over_budget("the voxel grid", static_cast<double>(before) + growth,
+                                                format_value(points.size()) + " points at voxel size " + format_value(config_.voxel_size) +
+                                                    " m; nothing of this chunk was integrated"));
+            }
+        }
+        summary_.points_dropped += arena.execute([&] { return grid_.insert(chunk, seen_from); });
         const double used = static_cast<double>(grid_.memory_bytes());
         if (used > budget_bytes()) {
             // Extrapolate this call's growth to all of its points for the message.
             const double growth = (used - static_cast<double>(before)) * static_cast<double>(points.size()) / static_cast<double>(end);
             throw ResourceLimit(over_budget("the voxel grid", static_cast<double>(before) + growth,
-                                            std::to_string(points.size()) + " points at voxel size " + std::to_string(config_.voxel_size) + " m"));
+                                            format_value(points.size()) + " points at voxel size " + format_value(config_.voxel_size) + " m"));
         }
     }
     summary_.voxels = grid_.size();
@@ -83,14 +97,14 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
 Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     if (grid_.point_count() == 0)
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
-                                                     : "the input has no finite point (all " + std::to_string(summary_.points_read) + " dropped)");
+                                                     : "the input has no finite point (all " + format_value(summary_.points_read) + " dropped)");
     const auto budget = static_cast<std::size_t>(budget_bytes());
     summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) +
                                estimate_extraction_bytes(grid_, config_, evaluation, budget);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
-                                        std::to_string(grid_.size()) + " voxels in " + std::to_string(grid_.index().block_count()) +
-                                            " blocks, max level " + std::to_string(config_.max_level())));
+                                        format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
+                                            " blocks, max level " + format_value(config_.max_level())));
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     Mesh mesh;
     const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
@@ -146,17 +160,20 @@ std::string Reconstructor::over_budget(const std::string& what, double bytes, co
 std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
                                       std::size_t limit) {
     const std::size_t blocks = grid.index().block_count();
+    // Blocks the surface runs through (3+ voxels).
+    std::size_t surface_blocks = 0;
+    for (std::size_t b = 0; b < blocks; ++b) surface_blocks += popcount(grid.occupancy(b)) >= 3;
+    // The output mesh: 40-64 vertices per surface block were measured (docs/reliability.md: a
+    // KITTI frame, the demo, 3 M points on 40 planes at 0.05-0.2 m), each with its position,
+    // normal, level and confidence (41 B) and about two triangles' share (24 B); bounded here by
+    // 96 vertices, 6 KiB.
+    const std::size_t mesh = surface_blocks * 6 * 1024;
     if (config.seeded_surface && evaluation == Evaluation::Fast) {
         // Measured (docs/reliability.md): the search's visited flags and slots cost about 4 KiB per
-        // voxel block; blocks the surface runs through (3+ voxels) add the field, its samples and
-        // the welding table, about 10 KiB more. Rounded up to 5 and 12 KiB.
-        std::size_t surface_blocks = 0;
-        for (std::size_t b = 0; b < blocks; ++b) {
-            surface_blocks += popcount(grid.occupancy(b)) >= 3;
-        }
-        // Plus the packed snapshot of the statistics (PackedVoxels): one record per voxel and a
-        // header per block.
-        return blocks * 5 * 1024 + surface_blocks * 12 * 1024 + grid.size() * sizeof(PackedVoxels::Voxel) +
+        // voxel block; surface blocks add the field, its samples and the welding table, about
+        // 10 KiB more. Rounded up to 5 and 12 KiB. Plus the packed snapshot of the statistics
+        // (PackedVoxels): one record per voxel and a header per block.
+        return mesh + blocks * 5 * 1024 + surface_blocks * 12 * 1024 + grid.size() * sizeof(PackedVoxels::Voxel) +
                blocks * sizeof(PackedVoxels::Block);
     }
     // Every vertex within the largest level L of a voxel is a candidate, each costing its key, its
@@ -171,9 +188,9 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
             for (int y = -r; y <= r; ++y)
                 for (int x = -r; x <= r; ++x) {
                     if (!dilated.try_emplace(VoxelKey(key.x() + x, key.y() + y, key.z() + z), 0).second) continue;
-                    if (++count * kPerBlock > limit) return count * kPerBlock;
+                    if (mesh + ++count * kPerBlock > limit) return mesh + count * kPerBlock;
                 }
-    return count * kPerBlock;
+    return mesh + count * kPerBlock;
 }
 
 Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const ReconstructionConfig& config,

@@ -170,6 +170,36 @@ TEST(BadInput, CoordinatesAt1e7MetresGiveTheSameMesh) {
     EXPECT_EQ(far_mesh.triangles, near_mesh.triangles);
 }
 
+TEST(BadInput, ABatchOverTheBudgetLeavesTheReconstructorAsItWas) {
+    // The oracle: a Reconstructor with no budget that never saw the refused batch.
+    const PointCloud scan = demo_scan();
+    PointCloud half, rest;
+    for (std::size_t i = 0; i < scan.points.size(); ++i) (i % 2 ? rest : half).points.push_back(scan.points[i]);
+    Reconstructor oracle(ReconstructionConfig{}, Eigen::Vector3d::Zero());
+    oracle.integrate(half);
+    oracle.integrate(rest);
+    const double grid_mb = static_cast<double>(oracle.grid().memory_bytes()) / 1048576.0;
+    const Mesh expected = oracle.extract_mesh();
+
+    ReconstructionConfig c;
+    c.max_memory_mb = std::ceil(3 * grid_mb) + 40;  // the scan fits, with its extraction
+    Reconstructor r(c, Eigen::Vector3d::Zero());
+    r.integrate(half);
+    const std::size_t voxels = r.grid().size(), points = r.grid().point_count();
+    // 300k points scattered over a kilometre: a voxel each, far past the budget.
+    PointCloud scattered;
+    std::uint64_t state = 7;
+    auto uniform = [&state] { return static_cast<double>((state = state * 6364136223846793005ULL + 1442695040888963407ULL) >> 11) * 0x1p-53; };
+    for (int i = 0; i < 300000; ++i) scattered.points.emplace_back(1000 * uniform() - 500, 1000 * uniform() - 500, 20 * uniform());
+    expect_error([&] { r.integrate(scattered); }, Expect::Resource, "nothing of this chunk was integrated", "a batch over the budget");
+    EXPECT_EQ(r.grid().size(), voxels);
+    EXPECT_EQ(r.grid().point_count(), points);
+    r.integrate(rest);  // a later batch that fits is taken
+    const Mesh mesh = r.extract_mesh();
+    EXPECT_EQ(mesh.triangles, expected.triangles);
+    EXPECT_EQ(mesh.vertices.size(), expected.vertices.size());
+}
+
 TEST(BadInput, MemoryBudgetRefusesWithTheEstimate) {
     ReconstructionConfig c;
     c.max_memory_mb = 2;  // the demo scan's grid alone is larger

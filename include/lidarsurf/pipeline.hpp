@@ -47,8 +47,10 @@ public:
     Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor);
 
     /// Adds the finite points of `cloud` to the voxel statistics; counts the others as dropped.
-    /// Throws ResourceLimit (with an estimate) when the grid outgrows config.max_memory_mb; the
-    /// points integrated before the throw stay in the grid.
+    /// Throws ResourceLimit (with an estimate) when the grid would outgrow config.max_memory_mb.
+    /// Points are taken in chunks of 262,144: a chunk that would not fit is refused before it
+    /// changes the grid (the chunks of the same call before it stay), so the Reconstructor keeps
+    /// taking later batches that fit.
     void integrate(const PointCloud& cloud);
     /// The same on a view (no copy): used by the Python bindings on numpy arrays.
     void integrate(std::span<const Eigen::Vector3d> points);

@@ -6,6 +6,8 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <span>
 #include <sstream>
 
@@ -35,7 +37,8 @@ using PointArray = py::array_t<double, py::array::c_style>;
 PointArray points_view(const py::handle& obj, const char* what) {
     py::array arr = py::array::ensure(obj);
     if (!arr) throw InvalidArgument(std::string(what) + " must be an array-like of shape (N, 3)");
-    if (arr.dtype().kind() != 'f')
+    // float32 and float64 only: numpy's longdouble, float16 and complex types are refused, not converted.
+    if (arr.dtype().kind() != 'f' || (arr.dtype().itemsize() != 4 && arr.dtype().itemsize() != 8))
         throw InvalidArgument(std::string(what) + " must be a float32 or float64 array (got dtype " + std::string(py::str(arr.dtype())) + ")");
     if (arr.ndim() != 2 || arr.shape(1) != 3) {
         std::ostringstream shape;
@@ -109,6 +112,15 @@ py::dict tuning_dict(const AllocatorTuning& done) {
     d["huge_pages"] = done.huge_pages;
     return d;
 }
+
+// A Reconstructor shared between Python threads: one call at a time (the C++ object is not
+// thread-safe). The GIL is released before the lock is taken, so a long extraction in one thread
+// neither blocks other Python code nor deadlocks a thread waiting for the lock.
+struct SharedReconstructor {
+    SharedReconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& origin) : rec(config, origin) {}
+    Reconstructor rec;
+    std::mutex mutex;
+};
 
 }  // namespace
 
@@ -240,34 +252,36 @@ PYBIND11_MODULE(_lidarsurf, m) {
             return "Mesh(" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.triangles.size()) + " triangles)";
         });
 
-    py::class_<Reconstructor>(m, "Reconstructor",
+    py::class_<SharedReconstructor>(m, "Reconstructor",
                               "A reconstruction that accepts more points: integrate() scans or parts of scans seen from the same "
                               "origin, extract_mesh() whenever a mesh is needed. Each extraction re-evaluates only the vertices the "
                               "points integrated since the previous one can reach, and gives the mesh one extraction of all the "
-                              "points would give.")
+                              "points would give. One object may be shared between threads: its calls run one at a time.")
         .def(py::init([](std::optional<ReconstructionConfig> config, const std::vector<double>& origin) {
-                 return Reconstructor(config.value_or(ReconstructionConfig{}), as_vec3(origin, "origin"));
+                 return std::make_unique<SharedReconstructor>(config.value_or(ReconstructionConfig{}), as_vec3(origin, "origin"));
              }),
              py::arg("config") = py::none(), py::arg("origin") = std::vector<double>{0, 0, 0},
              "config: a Config (paper defaults when None); origin: the sensor position that orients the normals (Eq. 2). "
              "Raises ValueError on a bad parameter.")
         .def(
             "integrate",
-            [](Reconstructor& rec, const py::handle& points) {
+            [](SharedReconstructor& self, const py::handle& points) {
                 const PointArray view = points_view(points, "points");
                 py::gil_scoped_release release;
-                rec.integrate(as_span(view));
+                const std::lock_guard lock(self.mutex);
+                self.rec.integrate(as_span(view));
             },
             py::arg("points"),
             "Add an (N, 3) float32/float64 array of points to the voxel statistics; non-finite points are counted as dropped. "
             "Raises MemoryError past the memory budget.")
         .def(
             "integrate_from",
-            [](Reconstructor& rec, const py::handle& points, const std::vector<double>& viewpoint) {
+            [](SharedReconstructor& self, const py::handle& points, const std::vector<double>& viewpoint) {
                 const PointArray view = points_view(points, "points");
                 const Eigen::Vector3d seen_from = as_vec3(viewpoint, "viewpoint");
                 py::gil_scoped_release release;
-                rec.integrate(as_span(view), seen_from);
+                const std::lock_guard lock(self.mutex);
+                self.rec.integrate(as_span(view), seen_from);
             },
             py::arg("points"), py::arg("viewpoint"),
             "Add points seen from `viewpoint` (same frame, e.g. world points and the pose's translation): for sequences. "
@@ -275,15 +289,21 @@ PYBIND11_MODULE(_lidarsurf, m) {
             "seen from; points added by integrate() count as seen from the origin.")
         .def(
             "extract_mesh",
-            [](Reconstructor& rec) {
+            [](SharedReconstructor& self) {
                 py::gil_scoped_release release;
-                return rec.extract_mesh();
+                const std::lock_guard lock(self.mutex);
+                return self.rec.extract_mesh();
             },
             "The mesh of every point integrated so far. Raises ValueError if no finite point was integrated.")
         .def_property_readonly(
             "summary",
-            [](const Reconstructor& rec) {
-                const ReconstructionSummary& s = rec.summary();
+            [](SharedReconstructor& self) {
+                ReconstructionSummary s;
+                {
+                    py::gil_scoped_release release;
+                    const std::lock_guard lock(self.mutex);
+                    s = self.rec.summary();
+                }
                 py::dict d;
                 d["points_read"] = s.points_read;
                 d["points_dropped"] = s.points_dropped;
@@ -305,8 +325,15 @@ PYBIND11_MODULE(_lidarsurf, m) {
             "vertices_reused (taken from the extraction before), vertices_defined, mesh_vertices, mesh_triangles, "
             "seconds_tsdf, seconds_mesh, and seconds_tsdf_phases (the fast path's TSDF stage by phase: setup, seed_wave, "
             "later_waves, serial, field; zeros for the reference path); seconds_insert sums every integrate().")
-        .def("__repr__", [](const Reconstructor& rec) {
-            return "Reconstructor(" + std::to_string(rec.summary().points_read) + " points, " + std::to_string(rec.grid().size()) + " voxels)";
+        .def("__repr__", [](SharedReconstructor& self) {
+            std::size_t points = 0, voxels = 0;
+            {
+                py::gil_scoped_release release;
+                const std::lock_guard lock(self.mutex);
+                points = self.rec.summary().points_read;
+                voxels = self.rec.grid().size();
+            }
+            return "Reconstructor(" + std::to_string(points) + " points, " + std::to_string(voxels) + " voxels)";
         });
 
     m.def("points_view", [](const py::handle& points) { return points_view(points, "points"); }, py::arg("points"),

@@ -122,6 +122,65 @@ def test_memory_budget_raises_memory_error(scan):
         lidarsurf.reconstruct(scan, config=c)
 
 
+@pytest.mark.parametrize("dtype", [np.longdouble, np.float16, np.complex128, np.int32, np.uint8, object])
+def test_dtypes_not_read_are_refused(scan, dtype):
+    with pytest.raises(ValueError, match="float32 or float64"):
+        lidarsurf.reconstruct(scan[:100].astype(dtype))
+    with pytest.raises(ValueError, match="float32 or float64"):
+        lidarsurf.Reconstructor().integrate(scan[:100].astype(dtype))
+
+
+def test_a_refused_batch_leaves_the_reconstructor_usable(scan):
+    # The oracle: the same good batches, without the refused one in between.
+    oracle = lidarsurf.Reconstructor()
+    oracle.integrate(scan[0::2])
+    oracle.integrate(scan[1::2])
+    expected = oracle.extract_mesh()
+    c = lidarsurf.Config()
+    c.max_memory_mb = 64
+    rec = lidarsurf.Reconstructor(c)
+    rec.integrate(scan[0::2])
+    scattered = np.random.default_rng(3).uniform(-500, 500, (300_000, 3))
+    with pytest.raises(MemoryError, match="nothing of this chunk was integrated"):
+        rec.integrate(scattered)
+    bad = scan[1::2].copy()
+    bad[7] = np.nan
+    with pytest.raises(ValueError, match="non-finite"):
+        rec.integrate(bad)
+    rec.integrate(scan[1::2])
+    mesh = rec.extract_mesh()
+    assert np.array_equal(mesh.triangles, expected.triangles)
+    assert np.array_equal(mesh.vertices, expected.vertices)
+
+
+def test_one_reconstructor_shared_by_threads(scan):
+    # Calls from several threads run one at a time: every point counted, the mesh of all of them.
+    import threading
+
+    rec = lidarsurf.Reconstructor()
+    parts = [scan[i::4] for i in range(4)]
+    errors = []
+
+    def work(part):
+        try:
+            for _ in range(3):
+                rec.integrate(part)
+                rec.extract_mesh()
+                rec.summary
+                repr(rec)
+        except Exception as e:  # pragma: no cover - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=work, args=(p,)) for p in parts]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    assert rec.summary["points_read"] == 3 * len(scan)
+    assert len(rec.extract_mesh().triangles) > 0
+
+
 def test_empty_cloud_raises_value_error():
     with pytest.raises(ValueError, match="no points"):
         lidarsurf.reconstruct(np.zeros((0, 3)))

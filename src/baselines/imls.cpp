@@ -13,6 +13,7 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/core/format_value.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -44,17 +45,17 @@ ImlsConfig ImlsConfig::matching(const ReconstructionConfig& config) {
 void ImlsConfig::validate() const {
     auto fail = [](const std::string& m) { throw InvalidArgument("imls: " + m); };
     if (!std::isfinite(voxel_size) || voxel_size < 1e-4 || voxel_size > 1e3)
-        fail("voxel size must be within [1e-4, 1e3] m (got " + std::to_string(voxel_size) + ")");
-    if (!std::isfinite(radius) || radius <= 0) fail("radius must be finite and > 0 (got " + std::to_string(radius) + ")");
+        fail("voxel size must be within [1e-4, 1e3] m (got " + format_value(voxel_size) + ")");
+    if (!std::isfinite(radius) || radius <= 0) fail("radius must be finite and > 0 (got " + format_value(radius) + ")");
     if (radius > kMaxNeighbourhoodLevel * voxel_size)
-        fail("radius must be at most " + std::to_string(kMaxNeighbourhoodLevel) + " voxels (got " + std::to_string(radius) + " m)");
-    if (normal_k < 3 || normal_k > 1000) fail("normal k must be in [3, 1000] (got " + std::to_string(normal_k) + ")");
-    if (!std::isfinite(bandwidth) || bandwidth <= 0) fail("bandwidth h must be finite and > 0 (got " + std::to_string(bandwidth) + ")");
+        fail("radius must be at most " + format_value(kMaxNeighbourhoodLevel) + " voxels (got " + format_value(radius) + " m)");
+    if (normal_k < 3 || normal_k > 1000) fail("normal k must be in [3, 1000] (got " + format_value(normal_k) + ")");
+    if (!std::isfinite(bandwidth) || bandwidth <= 0) fail("bandwidth h must be finite and > 0 (got " + format_value(bandwidth) + ")");
     if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
-        fail("truncation must be finite and >= 0 voxels (got " + std::to_string(truncation_voxels) + ")");
+        fail("truncation must be finite and >= 0 voxels (got " + format_value(truncation_voxels) + ")");
     if (truncation_voxels > 0 && truncation_voxels < 0.8660254037844386)
-        fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + std::to_string(truncation_voxels) + ")");
-    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
+        fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + format_value(truncation_voxels) + ")");
+    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + format_value(threads) + ")");
 }
 
 std::vector<Eigen::Vector3d> estimate_normals(const KdTree& tree, int k, const Eigen::Vector3d& sensor) {
@@ -136,7 +137,7 @@ Mesh reconstruct_imls(const PointCloud& cloud, const Eigen::Vector3d& sensor, co
         local.push_back(grid.to_local(p));
     }
     if (local.empty())
-        throw InvalidInput(sum.points == 0 ? "the input has no points" : "the input has no finite point (all " + std::to_string(sum.points) + " dropped)");
+        throw InvalidInput(sum.points == 0 ? "the input has no points" : "the input has no finite point (all " + format_value(sum.points) + " dropped)");
 
     Mesh mesh;
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);

@@ -1,9 +1,12 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
+#include <unordered_set>
 
 #include <tbb/parallel_for.h>
 
@@ -22,17 +25,22 @@ VoxelGrid::VoxelGrid(double alpha, const std::optional<Eigen::Vector3d>& origin)
     }
 }
 
+std::string VoxelGrid::out_of_range_message(const Eigen::Vector3d& world, std::optional<std::size_t> index) const {
+    char which[32] = "";
+    if (index) std::snprintf(which, sizeof which, "#%zu ", *index);
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "point %s(%.10g, %.10g, %.10g) is more than %d voxels (%.6g m) from the first point (%.10g, %.10g, %.10g); "
+                  "split the cloud, drop the outlier, or use a larger voxel size",
+                  which, world.x(), world.y(), world.z(), kMaxLatticeIndex, kMaxLatticeIndex * alpha_, origin_.x(), origin_.y(), origin_.z());
+    return buf;
+}
+
 VoxelKey VoxelGrid::key_of_local(const Eigen::Vector3d& local) const {
     VoxelKey key;
     for (int i = 0; i < 3; ++i) {
         const double f = std::floor(local[i] / alpha_);
-        if (!(std::fabs(f) <= kMaxLatticeIndex)) {
-            std::ostringstream msg;
-            msg << "point " << to_world(local).transpose() << " is more than " << kMaxLatticeIndex
-                << " voxels (" << kMaxLatticeIndex * alpha_ << " m) from the first point; "
-                << "split the cloud or use a larger voxel size";
-            throw InvalidInput(msg.str());
-        }
+        if (!(std::fabs(f) <= kMaxLatticeIndex)) throw InvalidInput(out_of_range_message(to_world(local), std::nullopt));
         key[i] = static_cast<std::int32_t>(f);
     }
     return key;
@@ -98,14 +106,24 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     constexpr std::uint32_t kSkip = 0xffffffffu;
     std::vector<VoxelKey> keys(n);
     std::vector<std::uint8_t> finite(n);
+    std::atomic<std::size_t> first_out_of_range{n};  // the message names the first such point, whatever the threads' order
     auto key_range = [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i != end; ++i) {
             finite[i] = points[i].allFinite();
-            if (finite[i]) keys[i] = key_of_local(points[i] - origin_);
+            if (!finite[i]) continue;
+            try {
+                keys[i] = key_of_local(points[i] - origin_);
+            } catch (const InvalidInput&) {
+                std::size_t seen = first_out_of_range.load();
+                while (i < seen && !first_out_of_range.compare_exchange_weak(seen, i)) {
+                }
+                return;
+            }
         }
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                       [&](const auto& r) { call_at_simd_level(key_range, r.begin(), r.end()); });
+    if (const std::size_t bad = first_out_of_range.load(); bad < n) throw InvalidInput(out_of_range_message(points[bad], bad));
     // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).
     //    Without a branch on whether the voxel is new (as likely as not on a lidar frame, so
@@ -218,6 +236,51 @@ std::size_t VoxelGrid::memory_bytes() const {
     return index_.memory_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
            keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t) +
            viewpoint_sums_.capacity() * sizeof(Eigen::Vector3d);
+}
+
+std::pair<std::size_t, std::size_t> VoxelGrid::count_new(std::span<const Eigen::Vector3d> points) const {
+    std::unordered_set<std::uint64_t> voxels, blocks;
+    const Eigen::Vector3d origin = origin_set_ ? origin_ : Eigen::Vector3d::Zero();
+    bool first = !origin_set_;
+    Eigen::Vector3d start = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& p : points) {
+        if (!p.allFinite()) continue;
+        if (first) {  // the origin the insert would set
+            start = (p / alpha_).array().round().matrix() * alpha_;
+            first = false;
+        }
+        const Eigen::Vector3d local = p - (origin_set_ ? origin : start);
+        VoxelKey key;
+        for (int i = 0; i < 3; ++i) {
+            const double f = std::floor(local[i] / alpha_);
+            if (!(std::fabs(f) <= kMaxLatticeIndex)) return {0, 0};  // the insert refuses it before any change
+            key[i] = static_cast<std::int32_t>(f);
+        }
+        if (find(key)) continue;
+        const auto pack = [](const VoxelKey& k) {
+            return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.x()) & 0x1fffff) << 42) |
+                   (static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.y()) & 0x1fffff) << 21) |
+                   (static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.z()) & 0x1fffff));
+        };
+        voxels.insert(pack(key));
+        const VoxelKey block = BlockMap<std::int32_t>::block_of(key);
+        if (index_.index_of(block) < 0) blocks.insert(pack(block));
+    }
+    return {voxels.size(), blocks.size()};
+}
+
+std::size_t VoxelGrid::memory_bytes_after(std::size_t new_voxels, std::size_t new_blocks, std::size_t batch) const {
+    // Each array grows to at most twice its capacity or to what it must hold, whichever is more
+    // (std::vector's growth); the block index by the blocks' pages and its hash, likewise.
+    const auto grown = [](std::size_t capacity, std::size_t needed) { return needed <= capacity ? capacity : std::max(2 * capacity, needed); };
+    const std::size_t voxels = keys_.size() + new_voxels, blocks = occupancy_.size() + new_blocks;
+    std::size_t bytes = grown(keys_.capacity(), keys_.size() + batch) * sizeof(VoxelKey);  // the insert's room for every point
+    bytes += grown(stats_.capacity(), voxels) * sizeof(VoxelStats);
+    if (viewpoints_enabled_) bytes += grown(viewpoint_sums_.capacity(), voxels) * sizeof(Eigen::Vector3d);
+    bytes += grown(occupancy_.capacity(), blocks) * sizeof(Occupancy) + grown(touched_flag_.capacity(), blocks) +
+             grown(touched_.capacity(), blocks) * sizeof(std::uint32_t);
+    bytes += 2 * index_.memory_bytes() + new_blocks * (sizeof(BlockMap<std::int32_t>::Block) + 64) + 32 * sizeof(BlockMap<std::int32_t>::Block);
+    return bytes;
 }
 
 const VoxelStats* VoxelGrid::find(const VoxelKey& key) const {

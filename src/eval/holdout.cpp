@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/format_value.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -22,11 +23,11 @@ std::uint64_t bounded(std::mt19937_64& rng, std::uint64_t n) {
 
 HoldoutSplit split_holdout(const PointCloud& cloud, double fraction, std::uint64_t seed) {
     if (!std::isfinite(fraction) || fraction <= 0 || fraction >= 1)
-        throw InvalidArgument("hold-out fraction must be in (0, 1) (got " + std::to_string(fraction) + ")");
+        throw InvalidArgument("hold-out fraction must be in (0, 1) (got " + format_value(fraction) + ")");
     const std::size_t n = cloud.points.size();
     const auto held = static_cast<std::size_t>(std::llround(fraction * static_cast<double>(n)));
     if (held == 0 || held == n)
-        throw InvalidInput("hold-out of " + std::to_string(fraction) + " of " + std::to_string(n) + " points leaves one part empty");
+        throw InvalidInput("hold-out of " + format_value(fraction) + " of " + format_value(n) + " points leaves one part empty");
     // Partial Fisher-Yates: the first `held` entries of the permutation are held out.
     std::vector<std::uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);

@@ -14,6 +14,7 @@
 #include "lidarsurf/core/kd_tree.hpp"
 #include "lidarsurf/eval/true_surface.hpp"
 #include "lidarsurf/mesh/mesh_distance.hpp"
+#include "lidarsurf/core/format_value.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -50,10 +51,10 @@ double unit(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x
 void EvaluationConfig::validate() const {
     auto fail = [](const std::string& m) { throw InvalidArgument("evaluate: " + m); };
     auto positive = [&](double v, const char* name) {
-        if (!std::isfinite(v) || v <= 0) fail(std::string(name) + " must be finite and > 0 (got " + std::to_string(v) + ")");
+        if (!std::isfinite(v) || v <= 0) fail(std::string(name) + " must be finite and > 0 (got " + format_value(v) + ")");
     };
     if (!origin.allFinite()) fail("origin must be finite");
-    if (!std::isfinite(max_range) || max_range < 0) fail("max range must be finite and >= 0 (got " + std::to_string(max_range) + ")");
+    if (!std::isfinite(max_range) || max_range < 0) fail("max range must be finite and >= 0 (got " + format_value(max_range) + ")");
     positive(delta, "delta");
     positive(curve_max, "curve max");
     positive(curve_step, "curve step");
@@ -64,7 +65,7 @@ void EvaluationConfig::validate() const {
     positive(truncation_completeness, "completeness truncation");
     positive(sample_spacing, "sample spacing");
     if (max_samples == 0 || max_samples > 100'000'000) fail("max samples must be in [1, 1e8]");
-    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
+    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + format_value(threads) + ")");
 }
 
 double share_at_most(const std::vector<double>& d, double t) {

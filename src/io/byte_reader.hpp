@@ -95,7 +95,8 @@ inline std::string lower(std::string_view s) {
     return r;
 }
 
-/// Reads a whole file into memory. Throws IoError when it cannot.
-std::string read_file(const std::string& path);
+/// Reads a whole file into memory. Throws IoError when it cannot, and ResourceLimit when it holds
+/// more than `max_bytes` (0 = no limit; a stream is read in chunks and stopped there).
+std::string read_file(const std::string& path, std::size_t max_bytes = 0);
 
 }  // namespace lidarsurf::detail

@@ -21,6 +21,14 @@ std::size_t KittiSequence::frame_count() const {
         throw IoError(dir.string() + ": not a sequence directory (no velodyne/ folder)");
     std::size_t n = 0;
     while (std::filesystem::exists(scan(n), ec)) ++n;
+    // A scan numbered past a gap would be silently left out: name the first missing one.
+    for (std::filesystem::directory_iterator it(dir / "velodyne", ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string file = it->path().filename().string();
+        if (file.size() != 10 || !file.ends_with(".bin") || file.find_first_not_of("0123456789") != 6) continue;
+        if (static_cast<std::size_t>(std::stoull(file.substr(0, 6))) > n)
+            throw InvalidInput((dir / "velodyne").string() + ": scan " + scan(n).filename().string() + " is missing but " + file +
+                               " exists (a gap in the numbering; renumber the scans or move the later ones away)");
+    }
     return n;
 }
 
@@ -53,6 +61,8 @@ std::vector<Eigen::Isometry3d> parse_poses(std::string_view data, const std::str
         }
         if (!(pose.linear().transpose() * pose.linear()).isApprox(Eigen::Matrix3d::Identity(), 1e-3))
             throw FormatError(name + ": line " + std::to_string(line_no) + ": the rotation is not orthonormal");
+        if (pose.linear().determinant() < 0)
+            throw FormatError(name + ": line " + std::to_string(line_no) + ": the rotation is a reflection (determinant -1): a mirrored frame, not a pose");
         poses.push_back(pose);
     }
     return poses;

@@ -36,17 +36,41 @@ std::optional<ScalarType> ply_type(std::string_view t) {
 
 enum class Encoding { Ascii, BinaryLE, BinaryBE };
 
-// Reads values one by one from either encoding, bounds-checked.
+// Reads values one by one from either encoding, bounds-checked. In ascii every record is one
+// line: a line with fewer or more values than the record's properties is an error naming it
+// (read on, it would shift every later record).
 class ValueSource {
 public:
-    ValueSource(std::string_view body, Encoding enc, const std::string& name) : enc_(enc), name_(name), bin_(body), text_(body) {}
+    ValueSource(std::string_view body, Encoding enc, const std::string& name, std::size_t header_lines)
+        : enc_(enc), name_(name), bin_(body), rest_(body), line_no_(header_lines) {}
+
+    /// Starts the next record (ascii: the next non-blank line).
+    void begin_record(const std::string& element) {
+        if (enc_ != Encoding::Ascii) return;
+        element_ = &element;
+        do {
+            if (rest_.empty()) throw FormatError(name_ + ": PLY data ends before the header's element counts are read (truncated?)");
+            line_ = Tokens(next_line(rest_));
+            ++line_no_;
+        } while (line_.rest().find_first_not_of(" \t") == std::string_view::npos);
+    }
+    /// Ends it (ascii: nothing may be left on the line).
+    void end_record() {
+        std::string_view tok;
+        if (enc_ == Encoding::Ascii && line_.next(tok))
+            throw FormatError(name_ + ": line " + std::to_string(line_no_) + ": more values than the " + *element_ +
+                              " element's properties (the header's layout)");
+    }
 
     double read(ScalarType t) {
         if (enc_ == Encoding::Ascii) {
             std::string_view tok;
-            if (!text_.next(tok)) throw FormatError(name_ + ": PLY data ends before the header's element counts are read (truncated?)");
+            if (!line_.next(tok))
+                throw FormatError(name_ + ": line " + std::to_string(line_no_) + ": fewer values than the " + *element_ +
+                                  " element's properties (the header's layout)");
             double v;
-            if (!parse_double(tok, v)) throw FormatError(name_ + ": PLY value '" + std::string(tok.substr(0, 32)) + "' is not a number");
+            if (!parse_double(tok, v))
+                throw FormatError(name_ + ": line " + std::to_string(line_no_) + ": PLY value '" + std::string(tok.substr(0, 32)) + "' is not a number");
             return v;
         }
         const std::size_t n = scalar_size(t);
@@ -55,14 +79,17 @@ public:
         pos_ += n;
         return v;
     }
-    std::size_t remaining_bytes() const { return enc_ == Encoding::Ascii ? text_.rest().size() : bin_.size() - pos_; }
+    std::size_t remaining_bytes() const { return enc_ == Encoding::Ascii ? rest_.size() + line_.rest().size() : bin_.size() - pos_; }
 
 private:
     Encoding enc_;
     const std::string& name_;
     std::string_view bin_;
     std::size_t pos_ = 0;
-    Tokens text_;
+    std::string_view rest_;   // ascii: the lines not read yet
+    Tokens line_{std::string_view{}};  // ascii: the current record's line
+    std::size_t line_no_;     // ascii: its number in the file
+    const std::string* element_ = nullptr;
 };
 
 }  // namespace
@@ -74,8 +101,10 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
     std::optional<Encoding> enc;
     std::vector<PlyElement> elements;
     bool ended = false;
+    std::size_t header_lines = 1;
     while (!rest.empty()) {
         const std::string_view line = next_line(rest);
+        ++header_lines;
         Tokens tk(line);
         std::string_view word;
         if (!tk.next(word) || word == "comment" || word == "obj_info") continue;
@@ -120,7 +149,7 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
     if (!ended) throw FormatError(name + ": PLY header has no end_header (truncated?)");
     if (!enc) throw FormatError(name + ": PLY header has no format line");
 
-    ValueSource src(rest, *enc, name);
+    ValueSource src(rest, *enc, name, header_lines);
     PlyContent out;
     bool have_vertex = false, have_faces = false;
     for (const PlyElement& el : elements) {
@@ -155,6 +184,7 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
         if (is_face && iface < 0) throw FormatError(name + ": PLY face element lacks vertex_indices");
         std::vector<double> poly;
         for (std::uint64_t r = 0; r < el.count; ++r) {
+            src.begin_record(el.name);
             Eigen::Vector3d xyz;
             for (std::size_t i = 0; i < el.props.size(); ++i) {
                 const auto& p = el.props[i];
@@ -180,6 +210,7 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
                         out.levels.push_back(static_cast<std::uint8_t>(std::clamp(std::isfinite(v) ? v : 0.0, 0.0, 255.0)));
                 }
             }
+            src.end_record();
             if (is_vertex) out.vertices.push_back(xyz);
         }
         have_faces = have_faces || is_face;

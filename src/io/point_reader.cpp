@@ -22,26 +22,43 @@ std::size_t drop_non_finite(PointCloud& cloud) {
 }
 
 namespace detail {
-std::string read_file(const std::string& path) {
+namespace {
+std::string over_limit(const std::string& path, std::size_t max_bytes) {
+    return path + ": the input holds more than the memory budget of " + std::to_string(max_bytes >> 20) +
+           " MiB; raise the budget (--max-memory) or split the input";
+}
+}  // namespace
+
+std::string read_file(const std::string& path, std::size_t max_bytes) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) throw IoError(path + ": is a directory");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path + ": cannot open for reading");
     // A file with a size is read at once into a string of that size (through a string stream,
     // the buffer grew and was copied several times: most of a KITTI frame's read time); one
-    // that cannot seek (a pipe: nothing is consumed by the failed seek) through the stream.
+    // that cannot seek (a pipe: nothing is consumed by the failed seek) through the stream, in
+    // chunks, so that a stream without end stops at the limit.
     const std::streamoff size = in.seekg(0, std::ios::end) ? static_cast<std::streamoff>(in.tellg()) : -1;
     if (size >= 0 && in.seekg(0)) {
+        if (max_bytes > 0 && static_cast<std::uint64_t>(size) > max_bytes) throw ResourceLimit(over_limit(path, max_bytes));
         std::string data(static_cast<std::size_t>(size), '\0');
         if (!in.read(data.data(), size) || in.peek() != std::char_traits<char>::eof())
             throw IoError(path + ": read error (the file changed while it was read?)");
         return data;
     }
     in.clear();
-    std::ostringstream ss;
-    ss << in.rdbuf();
+    std::string data;
+    constexpr std::size_t kChunk = 1 << 20;
+    for (;;) {
+        const std::size_t at = data.size();
+        data.resize(at + kChunk);
+        in.read(data.data() + at, static_cast<std::streamsize>(kChunk));
+        data.resize(at + static_cast<std::size_t>(in.gcount()));
+        if (max_bytes > 0 && data.size() > max_bytes) throw ResourceLimit(over_limit(path, max_bytes));
+        if (!in) break;
+    }
     if (in.bad()) throw IoError(path + ": read error");
-    return std::move(ss).str();
+    return data;
 }
 }  // namespace detail
 
@@ -157,9 +174,12 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
     if (fields.empty()) throw FormatError(name + ": PCD header has no FIELDS");
     for (const auto& f : fields)
         if (f.type == 'F' && f.size != 4 && f.size != 8) throw FormatError(name + ": PCD float field '" + f.name + "' has size " + std::to_string(f.size));
-    std::uint64_t n = points ? *points : (width && height ? *width * *height : 0);
     if (!points && !(width && height)) throw FormatError(name + ": PCD header has neither POINTS nor WIDTH and HEIGHT");
-    if (width && height && *width * *height != n) throw FormatError(name + ": PCD POINTS disagrees with WIDTH x HEIGHT");
+    std::uint64_t area = 0;
+    if (width && height && __builtin_mul_overflow(*width, *height, &area))
+        throw FormatError(name + ": PCD WIDTH x HEIGHT is too large");
+    const std::uint64_t n = points ? *points : area;
+    if (width && height && area != n) throw FormatError(name + ": PCD POINTS disagrees with WIDTH x HEIGHT");
 
     int ix = -1, iy = -1, iz = -1;
     std::size_t record = 0, tokens_per_point = 0;
@@ -211,7 +231,9 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
         if (rest.size() < 8) throw FormatError(name + ": PCD binary_compressed data is truncated");
         const std::uint32_t csize = load<std::uint32_t>(rest.data(), false), usize = load<std::uint32_t>(rest.data() + 4, false);
         if (csize > rest.size() - 8) throw FormatError(name + ": PCD compressed size " + std::to_string(csize) + " exceeds the file (truncated?)");
-        if (static_cast<std::uint64_t>(usize) != n * record) throw FormatError(name + ": PCD uncompressed size " + std::to_string(usize) + " disagrees with POINTS x record size");
+        std::uint64_t expected = 0;
+        if (__builtin_mul_overflow(n, static_cast<std::uint64_t>(record), &expected) || static_cast<std::uint64_t>(usize) != expected)
+            throw FormatError(name + ": PCD uncompressed size " + std::to_string(usize) + " disagrees with POINTS x record size");
         // LZF expands at most ~(264/3)x: refuse claims the compressed bytes cannot produce.
         if (static_cast<std::uint64_t>(usize) > 100ULL * csize + 1024) throw FormatError(name + ": PCD uncompressed size is implausible for its compressed size");
         std::vector<char> buf(usize);
@@ -235,21 +257,45 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
     return cloud;
 }
 
+namespace {
+
+// A text column name: quotes and a UTF-8 byte-order mark taken off, lower case.
+std::string column_name(std::string_view token) {
+    if (token.starts_with("\xEF\xBB\xBF")) token.remove_prefix(3);
+    while (!token.empty() && (token.front() == '"' || token.front() == '\'')) token.remove_prefix(1);
+    while (!token.empty() && (token.back() == '"' || token.back() == '\'')) token.remove_suffix(1);
+    return lower(token);
+}
+
+}  // namespace
+
 PointCloud parse_text_points(std::string_view data, const std::string& name) {
+    if (data.starts_with("\xEF\xBB\xBF")) data.remove_prefix(3);  // a UTF-8 byte-order mark (spreadsheet exports)
     if (data.empty()) throw FormatError(name + ": file is empty");
+    // Separators: spaces and tabs, and commas or semicolons. A file whose first line that is not a
+    // comment holds a semicolon uses ';' between values and may use ',' as its decimal mark
+    // ("1,5;2,25;0,5", a decimal-comma spreadsheet export); otherwise ',' separates values.
+    bool semicolons = false;
+    for (std::string_view probe = data; !probe.empty();) {
+        const std::string_view line = next_line(probe);
+        const std::size_t start = line.find_first_not_of(" \t");
+        if (start == std::string_view::npos || line[start] == '#' || line.substr(start).starts_with("//")) continue;
+        semicolons = line.find(';') != std::string_view::npos;
+        break;
+    }
+    auto is_sep = [semicolons](char c) { return c == ' ' || c == '\t' || c == ';' || (!semicolons && c == ','); };
     PointCloud cloud;
     int cx = 0, cy = 1, cz = 2;
     bool first = true;
     std::size_t line_no = 0;
     std::vector<std::string_view> toks;
+    std::string number;
     while (!data.empty()) {
         std::string_view line = next_line(data);
         ++line_no;
         toks.clear();
-        // Separators: spaces, tabs, commas and semicolons (runs count as one).
         std::size_t i = 0;
-        auto is_sep = [](char c) { return c == ',' || c == ';' || c == ' ' || c == '\t'; };
-        while (i < line.size()) {
+        while (i < line.size()) {  // runs of separators count as one
             while (i < line.size() && is_sep(line[i])) ++i;
             std::size_t j = i;
             while (j < line.size() && !is_sep(line[j])) ++j;
@@ -257,11 +303,17 @@ PointCloud parse_text_points(std::string_view data, const std::string& name) {
             i = j;
         }
         if (toks.empty() || toks[0].front() == '#' || toks[0].starts_with("//")) continue;
+        auto parse = [&](std::string_view tok, double& v) {
+            if (!semicolons || tok.find(',') == std::string_view::npos) return parse_double(tok, v);
+            number.assign(tok);
+            std::replace(number.begin(), number.end(), ',', '.');
+            return parse_double(number, v);
+        };
         double v;
-        if (first && !parse_double(toks[0], v)) {  // header line with column names
+        if (first && !parse(toks[0], v)) {  // header line with column names
             cx = cy = cz = -1;
             for (std::size_t c = 0; c < toks.size(); ++c) {
-                const std::string t = lower(toks[c]);
+                const std::string t = column_name(toks[c]);
                 if (t == "x" || t == "//x") cx = static_cast<int>(c);
                 if (t == "y") cy = static_cast<int>(c);
                 if (t == "z") cz = static_cast<int>(c);
@@ -276,7 +328,7 @@ PointCloud parse_text_points(std::string_view data, const std::string& name) {
         Eigen::Vector3d p;
         const int col[3] = {cx, cy, cz};
         for (int a = 0; a < 3; ++a)
-            if (!parse_double(toks[static_cast<std::size_t>(col[a])], p[a]))
+            if (!parse(toks[static_cast<std::size_t>(col[a])], p[a]))
                 throw FormatError(name + ": line " + std::to_string(line_no) + ": '" + std::string(toks[static_cast<std::size_t>(col[a])].substr(0, 32)) + "' is not a number");
         cloud.points.push_back(p);
     }
@@ -294,7 +346,7 @@ PointCloud read_points(const std::filesystem::path& path, const PointReadOptions
         else throw InvalidArgument(path.string() + ": cannot tell the format from the extension '" + ext + "' (use --format bin|ply|pcd|xyz)");
     }
     const std::string name = path.string();
-    const std::string data = read_file(name);
+    const std::string data = read_file(name, options.max_bytes);
     switch (fmt) {
         case PointFormat::KittiBin: return parse_kitti_bin(data, options.bin_fields, name);
         case PointFormat::Ply: return parse_ply_points(data, name);

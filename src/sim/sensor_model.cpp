@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/format_value.hpp"
 #include "splitmix.hpp"
 
 namespace lidarsurf::sim {
@@ -93,7 +94,7 @@ SensorModel SensorModel::ground_truth_for(const SensorModel& sensor, int beams) 
         bottom = std::min(bottom, e);
     }
     SensorModel s = sensor;
-    s.name = sensor.name + "-gt" + std::to_string(beams);
+    s.name = sensor.name + "-gt" + format_value(beams);
     s.elevations_deg = even_beams(beams, top, bottom);
     s.azimuth_step_deg = std::min(0.09, sensor.azimuth_step_deg / 2);
     s.range_noise = 0.0;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/format_value.hpp"
 
 namespace lidarsurf {
 
@@ -54,32 +55,32 @@ int ReconstructionConfig::max_reach() const {
 
 void ReconstructionConfig::validate() const {
     auto fail = [](const std::string& m) { throw InvalidArgument(m); };
-    if (!std::isfinite(voxel_size) || voxel_size <= 0) fail("voxel size must be finite and > 0 (got " + std::to_string(voxel_size) + ")");
-    if (voxel_size < 1e-4 || voxel_size > 1e3) fail("voxel size must be within [1e-4, 1e3] m (got " + std::to_string(voxel_size) + ")");
-    if (!std::isfinite(tau) || tau <= 0) fail("tau must be finite and > 0 (got " + std::to_string(tau) + ")");
-    if (n_min < 3) fail("n_min must be >= 3: a plane needs three points (got " + std::to_string(n_min) + ")");
-    const std::string range = "[1, " + std::to_string(kMaxNeighbourhoodLevel) + "]";
-    if (k_max < 1 || k_max > kMaxNeighbourhoodLevel) fail("k_max must be in " + range + " (got " + std::to_string(k_max) + ")");
-    if (k < 1 || k > kMaxNeighbourhoodLevel) fail("k must be in " + range + " (got " + std::to_string(k) + ")");
+    if (!std::isfinite(voxel_size) || voxel_size <= 0) fail("voxel size must be finite and > 0 (got " + format_value(voxel_size) + ")");
+    if (voxel_size < 1e-4 || voxel_size > 1e3) fail("voxel size must be within [1e-4, 1e3] m (got " + format_value(voxel_size) + ")");
+    if (!std::isfinite(tau) || tau <= 0) fail("tau must be finite and > 0 (got " + format_value(tau) + ")");
+    if (n_min < 3) fail("n_min must be >= 3: a plane needs three points (got " + format_value(n_min) + ")");
+    const std::string range = "[1, " + format_value(kMaxNeighbourhoodLevel) + "]";
+    if (k_max < 1 || k_max > kMaxNeighbourhoodLevel) fail("k_max must be in " + range + " (got " + format_value(k_max) + ")");
+    if (k < 1 || k > kMaxNeighbourhoodLevel) fail("k must be in " + range + " (got " + format_value(k) + ")");
     if (!std::isfinite(min_planarity) || min_planarity < 0 || min_planarity >= 1)
-        fail("min_planarity must be in [0, 1) (got " + std::to_string(min_planarity) + ")");
+        fail("min_planarity must be in [0, 1) (got " + format_value(min_planarity) + ")");
     if (!std::isfinite(max_thickness) || max_thickness < 0 || max_thickness > 1e3)
-        fail("max thickness must be within [0, 1e3] voxels (0 disables it; got " + std::to_string(max_thickness) + ")");
+        fail("max thickness must be within [0, 1e3] voxels (0 disables it; got " + format_value(max_thickness) + ")");
     if (slab_from_level != 0 && (slab_from_level < 2 || slab_from_level > kMaxNeighbourhoodLevel))
-        fail("slab fallback level must be 0 (off) or in [2, " + std::to_string(kMaxNeighbourhoodLevel) + "] (got " + std::to_string(slab_from_level) + ")");
+        fail("slab fallback level must be 0 (off) or in [2, " + format_value(kMaxNeighbourhoodLevel) + "] (got " + format_value(slab_from_level) + ")");
     if (slab_radial_extension < 0 || slab_radial_extension > kMaxNeighbourhoodLevel)
-        fail("slab radial extension must be in [0, " + std::to_string(kMaxNeighbourhoodLevel) + "] voxels (got " +
-             std::to_string(slab_radial_extension) + ")");
-    if (min_component_triangles < 0) fail("min component triangles must be >= 0 (got " + std::to_string(min_component_triangles) + ")");
+        fail("slab radial extension must be in [0, " + format_value(kMaxNeighbourhoodLevel) + "] voxels (got " +
+             format_value(slab_radial_extension) + ")");
+    if (min_component_triangles < 0) fail("min component triangles must be >= 0 (got " + format_value(min_component_triangles) + ")");
     if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
-        fail("truncation must be finite and >= 0 voxels (0 disables it; got " + std::to_string(truncation_voxels) + ")");
+        fail("truncation must be finite and >= 0 voxels (0 disables it; got " + format_value(truncation_voxels) + ")");
     if (truncation_voxels > 0 && truncation_voxels < 0.8660254037844386)
-        fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + std::to_string(truncation_voxels) + ")");
+        fail("truncation below sqrt(3)/2 voxels would cut surfaces crossing a cube (got " + format_value(truncation_voxels) + ")");
     if (seed_dilation < 0 || seed_dilation > kMaxNeighbourhoodLevel)
-        fail("seed dilation must be in [0, " + std::to_string(kMaxNeighbourhoodLevel) + "] (got " + std::to_string(seed_dilation) + ")");
+        fail("seed dilation must be in [0, " + format_value(kMaxNeighbourhoodLevel) + "] (got " + format_value(seed_dilation) + ")");
     if (!std::isfinite(max_memory_mb) || max_memory_mb < 1 || max_memory_mb > 1e9)
-        fail("max memory must be within [1, 1e9] MiB (got " + std::to_string(max_memory_mb) + ")");
-    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + std::to_string(threads) + ")");
+        fail("max memory must be within [1, 1e9] MiB (got " + format_value(max_memory_mb) + ")");
+    if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + format_value(threads) + ")");
 }
 
 }  // namespace lidarsurf

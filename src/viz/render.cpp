@@ -40,6 +40,12 @@ void RenderConfig::validate() const {
     if (width < 16 || height < 16 || width > 8192 || height > 8192) throw InvalidArgument("image size must be in [16, 8192] pixels");
     if (!(fov_deg > 1 && fov_deg < 170)) throw InvalidArgument("field of view must be in (1, 170) degrees");
     if ((eye && !eye->allFinite()) || (target && !target->allFinite())) throw InvalidArgument("camera position must be finite");
+    // Embree works in single precision: beyond ~1e7 m a ray's origin loses the metre (and far
+    // beyond it the ray tracer aborts), so a camera out there is refused.
+    constexpr double kMaxCoordinate = 1e7;
+    if ((eye && eye->cwiseAbs().maxCoeff() > kMaxCoordinate) || (target && target->cwiseAbs().maxCoeff() > kMaxCoordinate))
+        throw InvalidArgument("camera coordinates must be within 1e7 m of the origin");
+    if (eye && target && (*eye - *target).norm() < 1e-9) throw InvalidArgument("the camera's eye and target must differ");
 }
 
 Image render(const Mesh& mesh, const RenderConfig& config) {

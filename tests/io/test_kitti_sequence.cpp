@@ -103,15 +103,38 @@ TEST(KittiSequence, CalibrationTrConvertsCameraPosesToTheLidars) {
     fs::remove_all(d);
 }
 
+TEST(KittiSequence, MirroredPoseOrCalibrationIsRefused) {
+    // det = -1: orthonormal, but a reflection, which no sensor motion or mounting gives.
+    const std::string identity = "1 0 0 0 0 1 0 0 0 0 1 0\n";
+    const std::string mirrored = "-1 0 0 0 0 1 0 0 0 0 1 0\n";
+    EXPECT_EQ(parse_poses(identity, "p").size(), 1u);
+    try {
+        parse_poses(identity + mirrored, "p");
+        ADD_FAILURE() << "a mirrored pose was accepted";
+    } catch (const FormatError& e) {
+        EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("reflection"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(parse_calib_tr("P0: 1 2 3\nTr: " + mirrored, "calib"), FormatError);
+}
+
 TEST(KittiSequence, CountsConsecutiveFrames) {
     const fs::path d = temp_dir();
     const KittiSequence seq{d};
     EXPECT_THROW(seq.frame_count(), IoError);
     fs::create_directories(d / "velodyne");
     EXPECT_EQ(seq.frame_count(), 0u);
-    for (int i : {0, 1, 2, 4}) write(seq.scan(i), "");
-    EXPECT_EQ(seq.frame_count(), 3u);  // stops at the first gap
+    for (int i : {0, 1, 2}) write(seq.scan(i), "");
+    write(d / "velodyne" / "notes.txt", "");  // not a scan
+    EXPECT_EQ(seq.frame_count(), 3u);
     EXPECT_EQ(seq.scan(3).filename(), "000003.bin");
+    write(seq.scan(4), "");  // a gap: 000003.bin is missing, so 000004.bin would be left out silently
+    try {
+        seq.frame_count();
+        ADD_FAILURE() << "a gap in the numbering was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("000003.bin is missing"), std::string::npos) << e.what();
+    }
     fs::remove_all(d);
 }
 

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <tuple>
 
 #include <lzf.h>
 
@@ -95,6 +96,24 @@ TEST(Ply, MalformedHeaders) {
                                   "property float z\nend_header\n1 two 3\n", "nan"), FormatError);
 }
 
+TEST(Ply, AsciiRecordsWithTooFewOrTooManyValuesNameTheirLine) {
+    // One record a line: read on, a short or long row would shift every later point.
+    const std::string header = "ply\nformat ascii 1.0\ncomment c\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nend_header\n";  // 8 lines
+    expect_points(parse_ply_points(header + "1.5 -2.25 0.125\n\n10 20 -1.75\n-0.5 0 3\n", "blank line"), sample_points());
+    for (const auto& [body, line, words] : {std::tuple<std::string, std::string, std::string>{"1.5 -2.25 0.125\n10 20\n-0.5 0 3 4 5 6\n", "line 10", "fewer"},
+                                            {"1.5 -2.25 0.125 9\n10 20 -1.75\n-0.5 0 3\n", "line 9", "more"},
+                                            {"1.5 -2.25 0.125\n10 20 -1.75\n-0.5 0 3 7\n", "line 11", "more"}}) {
+        try {
+            parse_ply_points(header + body, "rows");
+            ADD_FAILURE() << "accepted: " << body;
+        } catch (const FormatError& e) {
+            EXPECT_NE(std::string(e.what()).find(line), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+        }
+    }
+}
+
 std::string pcd_header(const std::string& data, std::size_t n) {
     return "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\n"
            "COUNT 1 1 1 1\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) +
@@ -138,6 +157,40 @@ TEST(Pcd, MalformedHeaders) {
     EXPECT_THROW(parse_pcd_points(pcd_header("ascii", 2) + "1 2 3 4\n", "short"), FormatError);
     EXPECT_THROW(parse_pcd_points(pcd_header("zip", 1), "enc"), FormatError);
     EXPECT_THROW(parse_pcd_points("FIELDS x y z\nSIZE 4 4\nTYPE F F F\nPOINTS 1\nDATA ascii\n1 2 3\n", "sizes"), FormatError);
+}
+
+TEST(Pcd, CountsWhoseProductWrapsAroundAreRefused) {
+    // POINTS x record size = 2^64 + 2^19: a 64-bit product wraps to 2^19, which a valid LZF block
+    // of that size then matches; the reader must refuse the header, not read 2^45 points from it.
+    const std::uint64_t n = (std::uint64_t{1} << 45) + 1;
+    const std::string header = "VERSION 0.7\nFIELDS x y z pad\nSIZE 8 8 8 8\nTYPE F F F F\nCOUNT 1 1 1 65533\nWIDTH " +
+                               std::to_string(n) + "\nHEIGHT 1\nPOINTS " + std::to_string(n) + "\nDATA binary_compressed\n";
+    std::string raw(std::size_t{1} << 19, '\0');
+    std::uint64_t state = 12345;  // incompressible bytes: the block passes the expansion-ratio check
+    for (char& c : raw) c = static_cast<char>((state = state * 6364136223846793005ULL + 1442695040888963407ULL) >> 56);
+    std::string packed(raw.size() + raw.size() / 8, '\0');
+    const unsigned csize = lzf_compress(raw.data(), static_cast<unsigned>(raw.size()), packed.data(), static_cast<unsigned>(packed.size()));
+    ASSERT_GT(csize, 0u);
+    packed.resize(csize);
+    std::string data = header;
+    append(data, static_cast<std::uint32_t>(packed.size()));
+    append(data, static_cast<std::uint32_t>(raw.size()));
+    data += packed;
+    EXPECT_THROW(parse_pcd_points(data, "wrap"), FormatError);
+    // WIDTH x HEIGHT past 2^64.
+    EXPECT_THROW(parse_pcd_points("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 8000000000000000\nHEIGHT 8000000000000000\n"
+                                  "DATA binary\n",
+                                  "area"),
+                 FormatError);
+}
+
+TEST(Text, DecimalCommaByteOrderMarkAndQuotedHeaders) {
+    // A spreadsheet export in a decimal-comma locale: ';' between values, ',' in them.
+    expect_points(parse_text_points("x;y;z\n1,5;-2,25;0,125\n10;20;-1,75\n-0,5;0;3\n", "decimal comma"), sample_points());
+    expect_points(parse_text_points("1,5;-2,25;0,125\n10;20;-1,75\n-0,5;0;3\n", "no header"), sample_points());
+    expect_points(parse_text_points("\xEF\xBB\xBF" "x,y,z\n1.5,-2.25,0.125\n10,20,-1.75\n-0.5,0,3\n", "bom"), sample_points());
+    expect_points(parse_text_points("\xEF\xBB\xBF" "\"X\",\"Y\",\"Z\"\n1.5,-2.25,0.125\n10,20,-1.75\n-0.5,0,3\n", "quoted"), sample_points());
+    expect_points(parse_text_points("\xEF\xBB\xBF" "1.5 -2.25 0.125\n10 20 -1.75\n-0.5 0 3\n", "bom, no header"), sample_points());
 }
 
 TEST(Text, XyzCsvAndHeaders) {

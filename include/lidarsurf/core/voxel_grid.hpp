@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -64,6 +66,9 @@ public:
 
     /// Index of the voxel containing a local-frame point.
     VoxelKey key_of_local(const Eigen::Vector3d& local_point) const;
+    /// The message for a point out of the lattice's range: its exact coordinates, and its index in
+    /// the batch when known.
+    std::string out_of_range_message(const Eigen::Vector3d& world, std::optional<std::size_t> index) const;
 
     /// Statistics of a voxel (local frame), or nullptr if empty.
     const VoxelStats* find(const VoxelKey& key) const;
@@ -89,6 +94,11 @@ public:
 
     /// Bytes held by the grid: index blocks, occupancy words, statistics and keys (capacities).
     std::size_t memory_bytes() const;
+    /// How many voxels and blocks inserting `points` would add (a pass that changes nothing).
+    std::pair<std::size_t, std::size_t> count_new(std::span<const Eigen::Vector3d> points) const;
+    /// An upper bound of memory_bytes() after an insert of `batch` points adding `new_voxels`
+    /// voxels in `new_blocks` blocks.
+    std::size_t memory_bytes_after(std::size_t new_voxels, std::size_t new_blocks, std::size_t batch) const;
 
     /// Voxel index blocks: slot = index into stats()/keys(), -1 = empty voxel.
     const BlockMap<std::int32_t>& index() const { return index_; }

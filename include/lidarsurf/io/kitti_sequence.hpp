@@ -28,12 +28,14 @@ struct KittiSequence {
     std::filesystem::path sensor() const { return dir / "sensor.json"; }
 
     /// Number of consecutive scans velodyne/000000.bin, 000001.bin, ... Throws IoError if `dir`
-    /// or dir/velodyne does not exist.
+    /// or dir/velodyne does not exist, and InvalidInput when a scan is numbered past a gap (it
+    /// would be left out silently).
     std::size_t frame_count() const;
 };
 
 /// Reads a KITTI poses file. Throws IoError if unreadable and FormatError (with the line number)
-/// for a line that is not 12 finite numbers or whose rotation is not orthonormal (1e-3).
+/// for a line that is not 12 finite numbers or whose rotation is not orthonormal (1e-3) or is a
+/// reflection (determinant -1).
 std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path);
 /// The same on an in-memory buffer (used by read_poses and by the fuzzers). `name` is for messages.
 std::vector<Eigen::Isometry3d> parse_poses(std::string_view data, const std::string& name);

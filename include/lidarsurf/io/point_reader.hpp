@@ -18,6 +18,9 @@ PointFormat parse_point_format(std::string_view name);
 struct PointReadOptions {
     PointFormat format = PointFormat::Auto;  ///< Auto: chosen by the file extension.
     int bin_fields = 4;  ///< float32 values per point in .bin files (KITTI: 4, nuScenes: 5).
+    /// The most bytes the file may hold (0 = no limit): a larger file, or a stream (a pipe, a
+    /// device) that runs past it, throws ResourceLimit instead of being read on without end.
+    std::size_t max_bytes = 0;
 };
 
 /// Reads the x, y, z of every point. Non-finite points are kept (see drop_non_finite).
