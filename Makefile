@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl install package-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl install package-check pip-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -89,13 +89,21 @@ python: build
 install: build
 	cmake --install $(BUILD) --prefix $(PREFIX)
 
-# Installs into a scratch prefix and builds a consumer with find_package(lidarsurf).
+# Installs into a scratch prefix and builds a consumer with find_package(lidarsurf), then the
+# README's CMake and C++ snippets as a user's project (timed), run on a scan.
 package-check: build
 	rm -rf $(BUILD)/pkg-prefix $(BUILD)/pkg-consumer
 	cmake --install $(BUILD) --prefix $(BUILD)/pkg-prefix
 	cmake -S tests/package -B $(BUILD)/pkg-consumer -DCMAKE_PREFIX_PATH=$(CURDIR)/$(BUILD)/pkg-prefix
 	cmake --build $(BUILD)/pkg-consumer
 	$(BUILD)/pkg-consumer/consumer
+	bash tests/package/readme_consumer.sh $(BUILD)
+
+# The Python package as pip builds and installs it, offline: a wheel from pyproject.toml, installed
+# into a fresh venv (--system-site-packages) and for the system Python; the README's Python lines
+# run against each install (scripts/pip_check.sh).
+pip-check: setup
+	bash scripts/pip_check.sh $(CURDIR)/$(BUILD)/pip-check
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -1,6 +1,6 @@
 // lidarsurf bench: end-to-end speed (read -> voxel statistics -> TSDF -> marching cubes) per stage,
 // as medians over repeated runs, with peak memory, throughput, the ratios to the reference path and
-// to IMLS, and the scaling with input size and threads (issue 5). Without scans it simulates
+// to IMLS, and the scaling with input size and threads. Without scans it simulates
 // HDL-64 frames of the procedural town (the size scaling: one frame at 4 azimuth resolutions);
 // with scans, the size scaling subsamples the first one (every 4th and every 2nd point).
 #include <algorithm>
@@ -19,10 +19,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "allocator_tuning.hpp"
 #include "commands.hpp"
 #include "file_roles.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
-#include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/point_writer.hpp"
@@ -41,7 +41,7 @@ namespace {
 // Peak resident memory of this process since the last reset_peak_rss(), in MiB (Linux VmHWM;
 // writing 5 to clear_refs resets it to the current resident memory). -1 when unavailable. The
 // memory an earlier row freed is given back first (the allocator keeps some for reuse,
-// core/allocator_tuning.hpp), so that a row's peak is its own.
+// apps/allocator_tuning.hpp), so that a row's peak is its own.
 void reset_peak_rss() {
     release_free_memory();
     std::ofstream f("/proc/self/clear_refs");
@@ -152,7 +152,7 @@ struct Input {
 
 // Fast-path rows start with one run left out of the statistics: reset_peak_rss() has just given
 // the freed memory back, so a row's first run faults its memory in again (54-96 ms, median 64,
-// against 45-63, median 50, for the next runs of a KITTI frame, docs/benchmarks.md session 25),
+// against 45-63, median 50, for the next runs of a KITTI frame),
 // a cost a process pays once, not per frame. The reference path and IMLS (~1 s a run) keep every
 // run.
 Row run_row(const Input& in, Path path, const Method& method, int threads, int repeat) {
@@ -207,7 +207,7 @@ Row run_row(const Input& in, Path path, const Method& method, int threads, int r
     return row;
 }
 
-// Incremental re-meshing (issue 5): `scan` split into `sectors` azimuth sectors around the
+// Incremental re-meshing: `scan` split into `sectors` azimuth sectors around the
 // sensor (as a spinning lidar delivers its packets), each integrated and followed by an
 // extraction. Row "fast": a new Reconstructor per sector on everything so far (no reuse); row
 // "reuse": one Reconstructor for the revolution, whose extractions redo only what the new
@@ -487,8 +487,8 @@ int run_bench(const BenchOptions& o) {
         const double steal = end.total > start.total ? 100.0 * (end.steal - start.steal) / (end.total - start.total) : 0.0;
         char steal_text[64];
         std::snprintf(steal_text, sizeof steal_text, "; CPU time stolen by the hypervisor during the run %.1f %%", steal);
-        // How the allocator was set (core/allocator_tuning.hpp): huge pages are worth a few percent
-        // of a frame (docs/benchmarks.md, session 24), so the table says which.
+        // How the allocator was set (apps/allocator_tuning.hpp): huge pages are worth a few percent
+        // of a frame, so the table says which.
         const std::string machine = machine_description() + steal_text + "; SIMD " + to_string(simd_level()) +
                                     (o.allocator.empty() ? "" : "; " + o.allocator);
         std::printf("machine: %s\n", machine.c_str());

@@ -1,4 +1,4 @@
-// lidarsurf benchmark: the paper's Table I and Fig. 6, and the true-surface table (issue 8), on a
+// lidarsurf benchmark: the paper's Table I and Fig. 6, and the true-surface table, on a
 // sequence in the KITTI layout.
 #include <algorithm>
 #include <cstdio>
@@ -202,7 +202,7 @@ int run_benchmark(const BenchmarkOptions& o) {
         };
         for (std::size_t m = 0; m < methods.size(); ++m) {
             const auto t0 = std::chrono::steady_clock::now();
-            const Mesh mesh = run_benchmark_method(methods[m], scan, Eigen::Vector3d::Zero());
+            const Mesh mesh = reconstruct_with(methods[m], scan, Eigen::Vector3d::Zero());
             add(m, mesh, ms_since(t0) / 1e3);
         }
         for (std::size_t p = 0; p < peers.size(); ++p) {

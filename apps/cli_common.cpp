@@ -10,7 +10,6 @@
 #include <sstream>
 
 #include "lidarsurf/io/atomic_file.hpp"
-#include "lidarsurf/eval/benchmark.hpp"
 #include "lidarsurf/core/format_value.hpp"
 
 namespace fs = std::filesystem;
@@ -125,8 +124,7 @@ std::string method_name(const Method& m) { return m.imls ? "imls" : "mode " + st
 
 // Runs the chosen method; `summary` receives one line of counts and times.
 Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary) {
-    const BenchmarkMethod row{method_name(m), m.imls, m.config, m.imls_config};
-    Mesh mesh = run_benchmark_method(row, cloud, m.sensor, &summary);
+    Mesh mesh = reconstruct_with(m, cloud, m.sensor, &summary);
     if (mesh.empty())
         throw InvalidInput("the reconstruction produced no triangle (" + summary + "); the cloud may be too sparse for n_min=" +
                            format_value(m.config.n_min) + " at voxel size " + format_value(m.config.voxel_size));

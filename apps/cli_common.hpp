@@ -37,10 +37,7 @@ struct ReconstructOptions {
 void add_reconstruct_options(CLI::App* app, ReconstructOptions& o);
 
 /// The method and its settings, validated before any file is read.
-struct Method {
-    bool imls = false;
-    ReconstructionConfig config;
-    ImlsConfig imls_config;
+struct Method : MethodConfig {
     Eigen::Vector3d sensor = Eigen::Vector3d::Zero();
     PointReadOptions read;
 };

@@ -44,7 +44,7 @@ int run_fuse(const FuseOptions& o) {
         throw InvalidArgument("--first and --frames must be >= 0, --step >= 1, --remesh-every >= 0");
     const Method m = resolve_method(o.reconstruct);
     if (m.imls) throw InvalidArgument("fuse: the method must be paper (IMLS meshes one scan)");
-    const MeshFormat format = parse_mesh_format(o.mesh_format);
+    const MeshFormat requested = parse_mesh_format(o.mesh_format);
     const KittiSequence seq{o.dir};
     const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
     if (!fs::exists(seq.poses())) throw IoError(seq.poses().string() + ": no poses file (one sensor-to-world pose per scan)");
@@ -64,6 +64,7 @@ int run_fuse(const FuseOptions& o) {
     if (!o.calib.empty()) files.input(o.calib);
     files.output(o.output, "-o");
     files.check();
+    const MeshFormat format = mesh_format_for(o.output, requested);  // .stl: exit 2 now
     std::FILE* const report = report_stream(o.output);
 
     Reconstructor rec(m.config, poses[frames.front()] * m.sensor);

@@ -14,12 +14,12 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
+#include "allocator_tuning.hpp"
 #include "commands.hpp"
 #include "file_roles.hpp"
 #include "interrupt.hpp"
 
 #include "lidarsurf/baselines/imls.hpp"
-#include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/eval/holdout.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -44,11 +44,11 @@ using namespace lidarsurf::cli;
 int run_reconstruct(const std::string& input, const std::string& output, const std::string& mesh_format_name,
                     const ReconstructOptions& o) {
     const Method m = resolve_method(o);
-    const MeshFormat mesh_format = parse_mesh_format(mesh_format_name);
     FileRoles files;
     files.input(input);
     files.output(output, "-o");
     files.check();
+    const MeshFormat mesh_format = mesh_format_for(output, parse_mesh_format(mesh_format_name));  // .stl: exit 2 now
 
     auto t0 = std::chrono::steady_clock::now();
     const PointCloud cloud = read_points(input, m.read);
@@ -98,8 +98,9 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     FileRoles files;
     for (const std::string& in : o.inputs) files.input(in);
     if (eo_given_json(o)) files.output(o.json, "--json");
-    if (!o.mesh_out.empty() || o.mesh_out_given) files.output(o.mesh_out, "--mesh-out");
+    if (o.mesh_out_given) files.output(o.mesh_out, "--mesh-out");
     files.check();
+    if (o.mesh_out_given) mesh_format_for(o.mesh_out);  // an unknown extension: exit 2 now
     Mesh mesh;
     std::vector<Eigen::Vector3d> gt;
     std::string header;
@@ -166,7 +167,7 @@ int fail(const char* kind, std::string_view message, int code) {
 int main(int argc, char** argv) {
     handle_interrupts();  // before any other thread exists
     // Frame after frame (fuse, bench): freed memory kept for reuse, the heap in huge pages
-    // (core/allocator_tuning.hpp).
+    // (allocator_tuning.hpp; the library itself never changes the process's allocator).
     const AllocatorTuning allocator = tune_allocator();
     CLI::App app{"lidarsurf " LIDARSURF_VERSION_STRING " - surface reconstruction from lidar scans (Roldao et al., ITSC 2019)"};
     app.require_subcommand(1);

@@ -17,10 +17,7 @@ namespace fs = std::filesystem;
 namespace lidarsurf::cli {
 namespace {
 
-bool is_point_file(const fs::path& p) {
-    const std::string ext = extension_of(p);
-    return ext == ".bin" || ext == ".ply" || ext == ".pcd" || ext == ".xyz" || ext == ".txt" || ext == ".csv";
-}
+bool is_point_file(const fs::path& p) { return is_point_extension(p); }
 
 sim::SensorModel load_sensor(const std::string& spec) {
     if (extension_of(spec) == ".json") return sim::SensorModel::from_json(read_text_file(spec));
@@ -57,7 +54,11 @@ void check_files(const SimulateOptions& o, bool single) {
     if (extension_of(o.sensor) == ".json") files.input(o.sensor);
     if (single) {
         files.output(o.output, "-o");
-        if (o.gt_given || !o.gt.empty()) files.output(o.gt, "--gt");
+        if (o.gt_given || !o.gt.empty()) {
+            if (!o.gt.empty() && !is_point_extension(o.gt))
+                throw InvalidArgument("--gt '" + o.gt + "': unknown point-file extension (lidarsurf writes .bin, .ply, .pcd, .xyz, .txt, .csv)");
+            files.output(o.gt, "--gt");
+        }
     } else {
         files.output_directory(o.output, "-o");
     }

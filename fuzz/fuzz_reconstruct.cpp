@@ -94,9 +94,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // The reference path is O(k^3) per candidate vertex: run it on one input in eight. It and the
     // unseeded fast path evaluate every vertex within the reach of the data, so their work grows as
     // points x (2 reach + 1)^3 candidates x (2 k_max)^3 voxels each: they run only where that
-    // bound is <= 2e7 (and on <= 400 points, as IMLS below). Slow, not hangs: session 27's
-    // fuzzer met 825 points at 2 cm voxels that took 63 s unseeded under the sanitizers, session
-    // 28's 387 points at k_max 8 that passed the 400-point limit and took over 15 s (reference).
+    // bound is <= 2e7 (and on <= 400 points, as IMLS below). Slow, not hangs: the fuzzer
+    // met 825 points at 2 cm voxels that took 63 s unseeded under the sanitizers, and 387 points at k_max 8 that passed the 400-point limit and took over 15 s (reference).
     const double reach_side = 2.0 * std::max(c.max_reach(), 1) + 1, level_side = 2.0 * std::max(c.max_level(), 1);
     const double every_vertex_work = static_cast<double>(points.size()) * std::pow(reach_side * level_side, 3);
     for (const Evaluation e : {Evaluation::Fast, Evaluation::Reference}) {

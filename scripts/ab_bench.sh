@@ -35,8 +35,8 @@ out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for ((r = 1; r <= rounds; ++r)); do
     # A then B in odd rounds, B then A in even ones: the second run of a round is often slower (or
-    # faster) than the first on this host (session 23: a binary against itself gave 0.91-1.00 with
-    # a fixed order), and alternating the order cancels that bias.
+    # faster) than the first on this host (a binary against itself gave 0.91-1.00 with a fixed
+    # order), and alternating the order cancels that bias.
     order="A B"
     ((r % 2 == 0)) && order="B A"
     for tag in $order; do

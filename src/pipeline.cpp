@@ -202,4 +202,27 @@ Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const R
     return mesh;
 }
 
+void MethodConfig::validate() const {
+    if (imls) imls_config.validate();
+    else config.validate();
+}
+
+Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& sensor,
+                      std::string* summary) {
+    method.validate();
+    if (method.imls) {
+        PointCloud cloud;  // IMLS keeps its own copy for its kd-tree
+        cloud.points.assign(points.begin(), points.end());
+        ImlsSummary s;
+        Mesh mesh = reconstruct_imls(cloud, sensor, method.imls_config, &s);
+        if (summary) *summary = s.to_string();
+        return mesh;
+    }
+    Reconstructor rec(method.config, sensor);
+    rec.integrate(points);
+    Mesh mesh = rec.extract_mesh();
+    if (summary) *summary = rec.summary().to_string();
+    return mesh;
+}
+
 }  // namespace lidarsurf

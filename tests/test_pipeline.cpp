@@ -143,7 +143,7 @@ TEST(Pipeline, TheMeshDoesNotDependOnTheThreadCount) {
     }
 }
 
-// Incremental re-meshing (issue 5). A revolution integrated a quarter at a time (azimuth
+// Incremental re-meshing. A revolution integrated a quarter at a time (azimuth
 // sectors, as a spinning lidar delivers them), with an extraction after each quarter: each
 // extraction gives, bit for bit, the mesh of one extraction of all the quarters so far (a new
 // Reconstructor: the oracle), while the later ones evaluate fewer vertices and take the rest
@@ -308,7 +308,7 @@ TEST(Pipeline, RealKittiFrameWhenAvailable) {
     EXPECT_EQ(topo.misoriented_edges, 0u);
 }
 
-// Issue 5's equality on a real frame: the fast path gives the reference path's mesh on KITTI
+// The fast path's equality on a real frame: the fast path gives the reference path's mesh on KITTI
 // 000000 (the frame `bench` times), with the default and without the slab fallback.
 TEST(Pipeline, FastPathGivesTheReferenceMeshOnARealKittiFrame) {
     const std::filesystem::path scan = std::filesystem::path(LIDARSURF_SHARED_DATA) / "kitti" / "000000.bin";

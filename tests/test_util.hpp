@@ -90,7 +90,7 @@ inline std::filesystem::path temp_dir(const std::string& name) {
     return dir;
 }
 
-/// The fast path against the reference (issue 5): the same triangles, vertices within 1e-6 m.
+/// The fast path against the reference: the same triangles, vertices within 1e-6 m.
 inline void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
     ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
     ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
@@ -99,7 +99,7 @@ inline void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& wh
 }
 
 /// One scan reconstructed twice with the same configuration: through the fast path and through
-/// the reference path (issue 5), each with its reconstruction's summary.
+/// the reference path, each with its reconstruction's summary.
 struct FastAndReference {
     Mesh fast, reference;
     ReconstructionSummary fast_summary, reference_summary;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
@@ -97,5 +98,28 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
 /// One-shot helper: integrate `cloud` and extract the mesh.
 Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const ReconstructionConfig& config,
                  ReconstructionSummary* summary = nullptr);
+
+/// The methods a scan can be meshed with: the adaptive TSDF, as lidarsurf's default or as the
+/// paper wrote it (which of the two is `config`'s business: ReconstructionConfig::paper), or the
+/// paper's IMLS baseline.
+struct MethodConfig {
+    bool imls = false;            ///< the IMLS baseline instead of the TSDF
+    ReconstructionConfig config;  ///< the TSDF's parameters
+    ImlsConfig imls_config;       ///< IMLS's; ImlsConfig::matching(config) makes it comparable
+
+    /// Throws InvalidArgument naming the first bad field of the method that runs (a TSDF run does
+    /// not fail on IMLS's limits).
+    void validate() const;
+};
+
+/// The one entry point that the CLI, the Python module and the benchmark call: the points, seen from
+/// `sensor`, meshed by `method`. `summary`, when given, gets one line of counts and times. The mesh
+/// may be empty (too sparse a cloud); the caller decides whether that is an error.
+Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& sensor,
+                      std::string* summary = nullptr);
+inline Mesh reconstruct_with(const MethodConfig& method, const PointCloud& cloud, const Eigen::Vector3d& sensor,
+                             std::string* summary = nullptr) {
+    return reconstruct_with(method, std::span<const Eigen::Vector3d>(cloud.points), sensor, summary);
+}
 
 }  // namespace lidarsurf

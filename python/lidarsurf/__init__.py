@@ -10,12 +10,11 @@ numpy in, numpy out; the same Config as the C++ library and the CLI.
 import json as _json
 
 from ._lidarsurf import (Config, Mesh, Reconstructor, __version__, points_view, read_mesh, read_points,
-                         read_poses, reconstruct, release_free_memory, set_simd_level, simd_level, simd_levels, simulate,
-                         tune_allocator)
+                         read_poses, reconstruct, set_simd_level, simd_level, simd_levels, simulate)
 from ._lidarsurf import _evaluate_json
 
 __all__ = ["Config", "Mesh", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "evaluate", "simulate", "points_view",
-           "simd_level", "simd_levels", "set_simd_level", "tune_allocator", "release_free_memory", "__version__"]
+           "simd_level", "simd_levels", "set_simd_level", "__version__"]
 
 
 def evaluate(mesh, gt_points, origin=(0.0, 0.0, 0.0), max_range=0.0, threshold=0.1, delta=0.2, seed=1):

@@ -12,7 +12,6 @@
 #include <sstream>
 
 #include "lidarsurf/baselines/imls.hpp"
-#include "lidarsurf/core/allocator_tuning.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -64,16 +63,22 @@ Eigen::Vector3d as_vec3(const std::vector<double>& v, const char* what) {
     return {v[0], v[1], v[2]};
 }
 
-// numpy array over a std::vector owned by `owner` (kept alive by the array's base).
+// An array that refuses writes: a view into a Mesh, whose arrays Python must not change under it.
+py::array read_only(py::array a) {
+    a.attr("setflags")(py::arg("write") = false);
+    return a;
+}
+
+// Read-only numpy array over a std::vector owned by `owner` (kept alive by the array's base).
 template <typename T, int Cols>
 py::array vector_view(const std::vector<T>& v, const py::object& owner) {
     if constexpr (Cols == 1) {
-        return py::array_t<T>({static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner);
+        return read_only(py::array_t<T>({static_cast<py::ssize_t>(v.size())}, {static_cast<py::ssize_t>(sizeof(T))}, v.data(), owner));
     } else {
         using Scalar = typename T::Scalar;
-        return py::array_t<Scalar>({static_cast<py::ssize_t>(v.size()), static_cast<py::ssize_t>(Cols)},
-                                   {static_cast<py::ssize_t>(sizeof(T)), static_cast<py::ssize_t>(sizeof(Scalar))},
-                                   reinterpret_cast<const Scalar*>(v.data()), owner);
+        return read_only(py::array_t<Scalar>({static_cast<py::ssize_t>(v.size()), static_cast<py::ssize_t>(Cols)},
+                                             {static_cast<py::ssize_t>(sizeof(T)), static_cast<py::ssize_t>(sizeof(Scalar))},
+                                             reinterpret_cast<const Scalar*>(v.data()), owner));
     }
 }
 
@@ -87,31 +92,20 @@ py::array_t<double> points_to_numpy(std::vector<Eigen::Vector3d>&& pts) {
 
 Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin, std::optional<ReconstructionConfig> config,
                     std::optional<std::string> method) {
-    ReconstructionConfig c = config.value_or(ReconstructionConfig{});
+    MethodConfig m;
+    m.config = config.value_or(ReconstructionConfig{});
     const PointArray view = points_view(points, "points");
     const Eigen::Vector3d sensor = as_vec3(origin, "origin");
-    const bool imls = method && *method == "imls";
-    if (method && !imls) c.mode = parse_mode(*method);  // InvalidArgument names the choices
-    c.validate();
+    m.imls = method && *method == "imls";
+    if (method && !m.imls) m.config.mode = parse_mode(*method);  // InvalidArgument names the choices
+    m.config.validate();
+    m.imls_config = ImlsConfig::matching(m.config);
+    m.validate();
     py::gil_scoped_release release;
-    if (imls) {
-        PointCloud cloud;
-        const auto span = as_span(view);
-        cloud.points.assign(span.begin(), span.end());  // IMLS keeps its own copy for the kd-tree
-        return reconstruct_imls(cloud, sensor, ImlsConfig::matching(c));
-    }
-    Reconstructor rec(c, sensor);
-    rec.integrate(as_span(view));
-    return rec.extract_mesh();
+    return reconstruct_with(m, as_span(view), sensor);  // the array read in place
 }
 
-// What tune_allocator() / release_free_memory() did, as a dict.
-py::dict tuning_dict(const AllocatorTuning& done) {
-    py::dict d;
-    d["keeps_freed_memory"] = done.keeps_freed_memory;
-    d["huge_pages"] = done.huge_pages;
-    return d;
-}
+
 
 // A Reconstructor shared between Python threads: one call at a time (the C++ object is not
 // thread-safe). The GIL is released before the lock is taken, so a long extraction in one thread
@@ -197,7 +191,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
             return o.str();
         });
 
-    py::class_<Mesh>(m, "Mesh", "Triangle mesh. Array attributes are read-only views into the mesh (no copy).")
+    py::class_<Mesh>(m, "Mesh", "Triangle mesh. Array attributes are read-only views into the mesh (no copy; np.array(a) for a copy).")
         .def(py::init([](const py::handle& vertices, py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> triangles) {
                  const PointArray v = points_view(vertices, "vertices");
                  if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw InvalidArgument("triangles must have shape (T, 3)");
@@ -225,9 +219,9 @@ PYBIND11_MODULE(_lidarsurf, m) {
             "triangles",
             [](py::object self) {
                 const auto& t = self.cast<const Mesh&>().triangles;
-                return py::array_t<std::uint32_t>({static_cast<py::ssize_t>(t.size()), py::ssize_t{3}},
-                                                  {static_cast<py::ssize_t>(sizeof(t[0])), static_cast<py::ssize_t>(sizeof(std::uint32_t))},
-                                                  reinterpret_cast<const std::uint32_t*>(t.data()), self);
+                return read_only(py::array_t<std::uint32_t>({static_cast<py::ssize_t>(t.size()), py::ssize_t{3}},
+                                                            {static_cast<py::ssize_t>(sizeof(t[0])), static_cast<py::ssize_t>(sizeof(std::uint32_t))},
+                                                            reinterpret_cast<const std::uint32_t*>(t.data()), self));
             },
             "(T, 3) uint32 vertex indices, counter-clockwise seen from the sensor side.")
         .def_property_readonly(
@@ -426,19 +420,6 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "set_simd_level", [](const std::string& level) { set_simd_level(simd_level_from_string(level.c_str())); }, py::arg("level"),
         "Use the vector instructions `level` ('sse2', 'avx2', 'avx512') from now on, in every thread: to compare speeds, or to\n"
         "check that a level gives the same mesh. ValueError for a level this build or CPU lacks. Not while a reconstruction runs.");
-    m.def(
-        "tune_allocator",
-        [] { return tuning_dict(tune_allocator()); },
-        "Set glibc's allocator for meshing frame after frame, as the CLI does: freed blocks below 64 MiB kept for\n"
-        "reuse, and the heap advised for transparent huge pages where the kernel's mode is 'madvise' (a few percent of\n"
-        "a frame; docs/benchmarks.md). Call once, early, while no other thread allocates. Returns what was done as a dict\n"
-        "{'keeps_freed_memory': bool, 'huge_pages': bool}; both False without glibc. Never called by the library itself.");
-    m.def(
-        "release_free_memory",
-        [] { return tuning_dict(release_free_memory()); },
-        "Give the free memory of glibc's heaps back to the system (what tune_allocator keeps for reuse, up to\n"
-        "64 MiB), then tune the allocator again; returns what tune_allocator returns. For a program that has just\n"
-        "freed a lot and wants its resident memory back.");
     m.def(
         "simulate",
         [](const std::string& scene, std::uint64_t seed, bool ground_truth) {

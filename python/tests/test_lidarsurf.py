@@ -181,6 +181,17 @@ def test_one_reconstructor_shared_by_threads(scan):
     assert len(rec.extract_mesh().triangles) > 0
 
 
+def test_mesh_arrays_are_read_only(scan):
+    mesh = lidarsurf.reconstruct(scan)
+    for name in ("vertices", "triangles", "normals", "levels", "confidence"):
+        a = getattr(mesh, name)
+        assert not a.flags.writeable, name
+        with pytest.raises(ValueError, match="read-only"):
+            a[0] = 0
+    copy = np.array(mesh.vertices)
+    copy[0] = 0  # a copy is the user's
+
+
 def test_empty_cloud_raises_value_error():
     with pytest.raises(ValueError, match="no points"):
         lidarsurf.reconstruct(np.zeros((0, 3)))
@@ -320,21 +331,3 @@ def test_every_simd_level_gives_the_same_mesh(scan):
         assert np.array_equal(m.normals, meshes[0].normals) and np.array_equal(m.confidence, meshes[0].confidence)
     with pytest.raises(ValueError, match="unknown SIMD level"):
         lidarsurf.set_simd_level("avx1024")
-
-
-def test_tune_allocator_says_what_it_did():
-    done = lidarsurf.tune_allocator()
-    assert set(done) == {"keeps_freed_memory", "huge_pages"}
-    assert all(isinstance(v, bool) for v in done.values())
-    # Huge pages only where the kernel offers them on request (or glibc was told to by GLIBC_TUNABLES).
-    try:
-        with open("/sys/kernel/mm/transparent_hugepage/enabled") as f:
-            mode = f.read()
-        offered = "[madvise]" in mode or "[always]" in mode
-    except OSError:
-        offered = False
-    told = "glibc.malloc.hugetlb=1" in os.environ.get("GLIBC_TUNABLES", "")
-    if done["huge_pages"]:
-        assert done["keeps_freed_memory"] and (offered or told)
-    assert lidarsurf.tune_allocator() == done  # a second call does the same
-    assert lidarsurf.release_free_memory() == done  # gives memory back, tunes again

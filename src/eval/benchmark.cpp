@@ -83,20 +83,6 @@ std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base) 
     return rows;
 }
 
-Mesh run_benchmark_method(const BenchmarkMethod& m, const PointCloud& cloud, const Eigen::Vector3d& sensor, std::string* summary) {
-    if (m.imls) {
-        ImlsSummary s;
-        Mesh mesh = reconstruct_imls(cloud, sensor, m.imls_config, &s);
-        if (summary) *summary = s.to_string();
-        return mesh;
-    }
-    Reconstructor rec(m.config, sensor);
-    rec.integrate(cloud);
-    Mesh mesh = rec.extract_mesh();
-    if (summary) *summary = rec.summary().to_string();
-    return mesh;
-}
-
 BenchmarkAccumulator::BenchmarkAccumulator(std::vector<std::string> names) {
     for (auto& n : names) {
         Sum s;

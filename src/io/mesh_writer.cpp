@@ -114,11 +114,18 @@ void write_obj(const Mesh& mesh, std::ostream& out) {
     }
 }
 
+MeshFormat mesh_format_for(const std::filesystem::path& path, MeshFormat format) {
+    if (format != MeshFormat::Auto) return format;
+    const std::string ext = detail::lower(path.extension().string());
+    if (ext == ".ply") return MeshFormat::PlyBinary;
+    if (ext == ".obj") return MeshFormat::Obj;
+    throw InvalidArgument(path.string() + ": unknown mesh extension '" + ext +
+                          "' (lidarsurf writes .ply and .obj; name the format with --mesh-format ply|ply-ascii|obj)");
+}
+
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format) {
-    if (format == MeshFormat::Auto) {
-        format = detail::lower(path.extension().string()) == ".obj" ? MeshFormat::Obj : MeshFormat::PlyBinary;
-    }
-    AtomicFile file(path);  // the stream writers check the mesh; a throw removes the temporary
+    AtomicFile file(path);  // first: a directory or an unwritable place is the file system's error
+    format = mesh_format_for(path, format);  // the stream writers check the mesh; a throw removes the temporary
     if (format == MeshFormat::Obj) write_obj(mesh, file.stream());
     else write_ply(mesh, file.stream(), format == MeshFormat::PlyBinary);
     file.commit();

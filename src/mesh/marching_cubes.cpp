@@ -109,7 +109,7 @@ public:
     bool corners(const VoxelKey& base, Corners& s) { return lookup_.corners(base, s); }
     /// Starts loading the welding slots of the corners `s` (those process_cube reads for the
     /// cube's edge vertices): the table is indexed by the field's order, and its loads were the
-    /// largest stall of the meshing (docs/benchmarks.md, session 28).
+    /// largest stall of the meshing (perf, one thread: 12 % of its samples).
     void prefetch_welds(const Corners& s) const {
         for (const VertexSample* c : s) __builtin_prefetch(&ids_[index_of(*c)]);
     }

@@ -509,7 +509,7 @@ NeighbourhoodWindow::VoxelList NeighbourhoodWindow::build_list(ListArena* arena)
     // The region's layers (one pass over the blocks), then their voxels (one allocation for all the
     // arrays, in `arena` when given).
     // A scratch array per thread, reused from list to list: a vector per list, grown by doubling,
-    // was about five allocations per list, half of a KITTI frame's (docs/benchmarks.md, session 29).
+    // was about five allocations per list, half of a KITTI frame's allocations.
     thread_local std::vector<LayerBits> layers;
     layers.clear();
     std::size_t count = 0;

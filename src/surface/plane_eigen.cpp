@@ -35,8 +35,7 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
     // A closer start, still left of the root: for a PSD c, det(c) / M(c) (M: the sum of c's
     // principal 2x2 minors) = l1 l2 l3 / (l1 l2 + l1 l3 + l2 l3) <= lambda3, short of it by about
     // lambda3^2 (l1 + l2) / (l1 l2): one Newton step fewer on lidar neighbourhoods (5.35 -> 4.35
-    // steps per fit on KITTI 000000; the early stop below saves another, docs/benchmarks.md,
-    // session 16). Rounding may put it right of the root (p > 0 there): then the start stays -T/3.
+    // steps per fit on KITTI 000000; the early stop below saves another). Rounding may put it right of the root (p > 0 there): then the start stays -T/3.
     {
         const double cxx = c(0, 0), cxy = c(0, 1), cxz = c(0, 2), cyy = c(1, 1), cyz = c(1, 2), czz = c(2, 2);
         const double minors = cxx * cyy - cxy * cxy + cxx * czz - cxz * cxz + cyy * czz - cyz * cyz;
@@ -66,7 +65,7 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c) {
         // planarity bound keeps) could stop short of rounding. The same estimate, taken with this
         // step's own numbers (3 |l| s^2 / p', p' as used for the step), stops where the error left
         // is <= 1e-17 T, below the rounding of l (|l| is about T / 3): one Newton step (a
-        // division) fewer in 96k of the 160k fits of KITTI 000000 (docs/benchmarks.md, session 28).
+        // division) fewer in 96k of the 160k fits of KITTI 000000.
         if (std::fabs(step) <= 1e-13 * t || 3.0 * std::fabs(l) * step * step <= 1e-17 * t * dp) {
             converged = true;
             break;
@@ -114,7 +113,7 @@ namespace {
 // gives -1 (all bits) in a true lane, 0 in a false one; a failed lane computes on, harmlessly.
 // The formulas are plane_eigen's, written again: one template for both (masks as bools for one
 // value) gave the same bits but made the scalar fit, which the evaluation runs, 1-2 % slower end
-// to end (branches became selects; docs/benchmarks.md, session 22). The test
+// to end (branches became selects). The test
 // PlaneEigen.FourLanesGiveTheScalarBits holds the two to the same bits.
 using Lanes = double __attribute__((vector_size(32)));
 using Mask = long long __attribute__((vector_size(32)));

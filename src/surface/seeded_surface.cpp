@@ -294,8 +294,8 @@ private:
     tbb::concurrent_vector<StoreChunk, std::allocator<StoreChunk>> chunks_;
 };
 // The part of the store a thread has claimed and not filled yet: the threads claim the store in
-// runs of kRun entries (one shared atomic per run instead of one per vertex: on the Xeon of
-// session 15 the per-vertex push_back and counter increments, contended by both cores, were a
+// runs of kRun entries (one shared atomic per run instead of one per vertex: on a Xeon the
+// per-vertex push_back and counter increments, contended by both cores, were a
 // tenth of a KITTI frame). Entries left unfilled at the end are never referenced by a slot.
 struct StoreRun {
     std::size_t next = 0, end = 0;

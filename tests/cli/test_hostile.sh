@@ -26,10 +26,10 @@ expect 0 "triangles" -- r scan.bin -o pipe.ply
 wait $reader
 check "a FIFO output stays a FIFO" -- test -p pipe.ply
 check "the reader got the mesh" -- test "$(head -c 3 from_pipe.bin)" = ply
-expect 0 "" -- r scan.bin -o /dev/null
+expect 0 "" -- r scan.bin -o /dev/null --mesh-format ply
 check "/dev/null is still a device" -- test -c /dev/null
-check "-o /dev/stdout: the mesh alone on stdout" -- test "$(r scan.bin -o /dev/stdout 2>/dev/null | head -c 3)" = ply
-r scan.bin -o /dev/stdout 2>/dev/null > stdout.ply
+check "-o /dev/stdout: the mesh alone on stdout" -- test "$(r scan.bin -o /dev/stdout --mesh-format ply 2>/dev/null | head -c 3)" = ply
+r scan.bin -o /dev/stdout --mesh-format ply 2>/dev/null > stdout.ply
 check "-o /dev/stdout: the report not inside the mesh" -- test "$(tail -c 300 stdout.ply | grep -ac triangles)" = 0
 
 # --- An output that is an input: refused before any work, for every command and output flag.
@@ -54,6 +54,15 @@ expect 2 "did not write" -- "$cli" simulate --frames 2 -o mine
 check "inputs unchanged" -- test "$(sum scan.bin)" = "$scan_sum" -a "$(sum seq/velodyne/000000.bin)" = "$seq_sum"
 check "mesh.ply unchanged" -- test "$(head -c 3 mesh.ply)" = ply
 check "a folder lidarsurf did not write is kept" -- test -f mine/notes.txt
+
+# --- Output names whose format lidarsurf does not write: refused before any work, not written as PLY.
+expect 2 "unknown mesh extension '.stl'" -- r scan.bin -o x.stl
+expect 2 "unknown mesh extension" -- r scan.bin -o /dev/stdout
+expect 2 "unknown mesh extension" -- "$cli" fuse seq -o map.vtk
+expect 2 "unknown mesh extension" -- "$cli" evaluate --holdout 0.5 scan.bin --mesh-out held.stl
+expect 2 "unknown point-file extension" -- "$cli" simulate --scene demo -o s.bin --gt gt.las
+expect 0 "triangles" -- r scan.bin -o upper.PLY
+check "no x.stl written" -- test ! -e x.stl
 
 # --- Rows that would shift every later point, numbers in another locale.
 hdr='ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n'

@@ -148,7 +148,7 @@ TEST(VoxelGrid, BatchInsertIsOneByOneInsertionToTheLastBit) {
 // batch insert's parallel chunks (4096 points), runs broken by non-finite points or by the end of a
 // batch, and voxels met again after other ones. Also the order in which blocks were first touched,
 // against one-by-one insertion. (A version of the insert that numbered only each run's first point
-// serially was slower and was dropped, docs/benchmarks.md session 29; this test caught its bugs.)
+// serially was slower and was dropped; this test caught its bugs.)
 TEST(VoxelGrid, BatchInsertOfScanOrderedRunsIsOneByOneInsertion) {
     const double alpha = 0.2;
     std::mt19937 rng(29);

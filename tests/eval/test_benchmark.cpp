@@ -124,7 +124,7 @@ TEST(Benchmark, PaperClaimsHoldOnATownFrame) {
     const sim::SimulatedFrame f = simulator.frame(0);
     const auto rows = table_one_methods(ReconstructionConfig{});
     auto measure = [&](std::size_t row) {
-        const Mesh m = run_benchmark_method(rows[row], f.scan, Eigen::Vector3d::Zero());
+        const Mesh m = reconstruct_with(rows[row], f.scan, Eigen::Vector3d::Zero());
         return evaluate(m, f.ground_truth.points, EvaluationConfig{});
     };
     // Rows: 0 default, 1 AN+GC kmax=5, 3 AN kmax=5, 10 CN k=1, 11 IMLS (the paper as written).

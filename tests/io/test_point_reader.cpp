@@ -47,6 +47,25 @@ TEST(KittiBin, RoundTripAndExtraFields) {
     EXPECT_THROW(parse_kitti_bin(five, 4, "five"), FormatError);  // 60 bytes: not whole 16-byte records
 }
 
+TEST(PointWriter, EveryExtensionReadsBack) {
+    const auto dir = test::temp_dir("point_writer");
+    PointCloud cloud;
+    cloud.points = {{1.0 / 3.0, -2.25, 1e5 + 0.125}, {10.0, 20.0, -1.75}, {-0.5, 0.0, 3.0}};
+    for (const char* name : {"a.xyz", "a.txt", "a.CSV", "a.ply"}) {  // exact: text at 17 digits, PLY in double beyond 1e4
+        write_points(cloud, dir / name);
+        expect_points(read_points(dir / name), cloud.points);
+    }
+    std::vector<Eigen::Vector3d> as_float;  // float32 records
+    for (const auto& p : cloud.points) as_float.push_back(p.cast<float>().cast<double>());
+    for (const char* name : {"a.bin", "a.pcd"}) {
+        write_points(cloud, dir / name);
+        expect_points(read_points(dir / name), as_float);
+    }
+    EXPECT_THROW(write_points(cloud, dir / "a.las"), InvalidArgument);
+    EXPECT_FALSE(std::filesystem::exists(dir / "a.las"));
+    std::filesystem::remove_all(dir);
+}
+
 TEST(KittiBin, MalformedFiles) {
     EXPECT_THROW(parse_kitti_bin("", 4, "empty"), FormatError);
     EXPECT_THROW(parse_kitti_bin(std::string(17, '\0'), 4, "truncated"), FormatError);

@@ -1,4 +1,4 @@
-// A peer for the accuracy benchmark (issue 8): PCL 1.13's moving least squares (MLS) smoothing
+// A peer for the accuracy benchmark: PCL 1.13's moving least squares (MLS) smoothing
 // followed by greedy projection triangulation, the mesher many robotics users have from PCL. Run
 // on a sequence, it writes the layout `lidarsurf benchmark --peers` reads:
 //   OUT/pcl-mls-gp/NNNNNN.ply and OUT/pcl-mls-gp/times.txt ("frame seconds").

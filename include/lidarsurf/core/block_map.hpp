@@ -240,8 +240,7 @@ public:
     /// neighbours of a cube there fall in, are all remembered at once (the surface search's
     /// lookups alternate between them; Accessor probes the hash each time the block changes).
     /// Accessor stays for lookups that rarely alternate (marching cubes looks each neighbour block
-    /// of a border cube up once): there the table cost more instructions than it saved probes
-    /// (docs/benchmarks.md, session 23).
+    /// of a border cube up once): there the table cost more instructions than it saved probes.
     class CornerAccessor {
     public:
         explicit CornerAccessor(const BlockMap& map) : map_(&map) {}

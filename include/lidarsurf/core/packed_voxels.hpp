@@ -1,5 +1,5 @@
 #pragma once
-// A read-only snapshot of a VoxelGrid for the fast path's box sums (issue 5). Per 8x8x8 block,
+// A read-only snapshot of a VoxelGrid for the fast path's box sums. Per 8x8x8 block,
 // the statistics of its occupied voxels are stored contiguously in offset order and found by
 // their rank among the block's occupancy bits. Summing a box then reads the occupancy word it
 // already needs and one compact record per voxel, next to its neighbours' records, instead of

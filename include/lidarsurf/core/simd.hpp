@@ -1,5 +1,5 @@
 #pragma once
-// Which vector instructions the fast path uses (issue 5; docs/method.md, "Vector instructions
+// Which vector instructions the fast path uses (docs/method.md, "Vector instructions
 // chosen at run time"). The build is portable x86-64 (SSE2); the hot code also exists for AVX2
 // (with BMI1/2 and POPCNT) and AVX-512, chosen at run time: the voxel lists' scans compare 16, 32
 // or 64 entries per instruction, the slab walk ranks records with POPCNT, and the vertex

@@ -1,7 +1,8 @@
 #pragma once
 // The paper's benchmark (Table I, Fig. 6): every method row run on every frame, the evaluation of
-// each frame averaged over the sequence. The frame loop (reading files) is the caller's; this
-// module names the rows, runs one, and aggregates and formats the results.
+// each frame averaged over the sequence. The frame loop (reading files) is the caller's, and each
+// row runs through the pipeline's reconstruct_with(); this module names the rows, and aggregates and
+// formats the results.
 #include <string>
 #include <vector>
 
@@ -9,16 +10,14 @@
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/surface/config.hpp"
 
 namespace lidarsurf {
 
-/// One row: the paper's method in some mode, or the IMLS baseline.
-struct BenchmarkMethod {
+/// A row of the benchmark: a method (run through the pipeline's reconstruct_with()) and its name.
+struct BenchmarkMethod : MethodConfig {
     std::string name;  ///< as in Table I, e.g. "AN+GC kmax=5", "CN k=1", "IMLS"
-    bool imls = false;
-    ReconstructionConfig config;
-    ImlsConfig imls_config;
 };
 
 /// The default configuration `base` ("default"), then Table I's rows as the paper wrote them
@@ -30,11 +29,6 @@ std::vector<BenchmarkMethod> table_one_methods(const ReconstructionConfig& base)
 /// sqrt(3) truncation; thickness; base's truncation; snapping), then base with k_max 3 and 7 and
 /// base at half the voxel size with twice k_max (docs/benchmarks.md, the ablation).
 std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base);
-
-/// Reconstructs `cloud` (sensor at `sensor`) with the row's method. `summary` gets one line of
-/// counts and times. Returns the mesh, possibly empty.
-Mesh run_benchmark_method(const BenchmarkMethod& method, const PointCloud& cloud, const Eigen::Vector3d& sensor,
-                          std::string* summary = nullptr);
 
 /// One row's results averaged over the frames it produced a mesh for.
 struct MethodAggregate {

@@ -15,7 +15,12 @@ enum class MeshFormat { Auto, PlyBinary, PlyAscii, Obj };
 /// "auto", "ply", "ply-ascii", "obj"; throws InvalidArgument otherwise.
 MeshFormat parse_mesh_format(std::string_view name);
 
-/// Writes to `path` atomically (temporary + rename). Auto: ".obj" gives OBJ, anything else PLY.
+/// The format a mesh written to `path` gets: `format` itself unless Auto; Auto takes it from the
+/// extension (".ply" binary PLY, ".obj" OBJ, any case) and throws InvalidArgument for any other
+/// extension (".stl" is not written as PLY in disguise).
+MeshFormat mesh_format_for(const std::filesystem::path& path, MeshFormat format = MeshFormat::Auto);
+
+/// Writes to `path` atomically (temporary + rename), in mesh_format_for(path, format).
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format = MeshFormat::Auto);
 
 /// Stream writers (no atomicity; used by write_mesh and tests).

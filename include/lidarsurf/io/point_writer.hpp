@@ -1,5 +1,7 @@
 #pragma once
-// Writes point clouds: KITTI .bin (float32 x, y, z, intensity = 0) or PLY; atomic.
+// Writes point clouds, atomically, in the format the extension names (any case): KITTI .bin
+// (float32 x, y, z, intensity = 0), binary PLY, binary PCD (float32 x, y, z), or text .xyz, .txt,
+// .csv (x y z a line, full precision). Any other extension throws InvalidArgument.
 #include <filesystem>
 
 #include "lidarsurf/io/point_cloud.hpp"
@@ -7,5 +9,8 @@
 namespace lidarsurf {
 
 void write_points(const PointCloud& cloud, const std::filesystem::path& path);
+
+/// Whether write_points writes this extension (".bin", ".ply", ".pcd", ".xyz", ".txt", ".csv").
+bool is_point_extension(const std::filesystem::path& path);
 
 }  // namespace lidarsurf

@@ -1,5 +1,5 @@
 #pragma once
-// Fast neighbourhood statistics for the vertices of one 8^3 vertex block (issue 5). The packed
+// Fast neighbourhood statistics for the vertices of one 8^3 vertex block. The packed
 // voxel blocks (PackedVoxels) that any H^k(v), k <= max_level, of those vertices can reach
 // (3x3x3 blocks for max_level <= 8, 5x5x5 up to 16) are looked up at most once each, when a box
 // first reaches them, so summing a box needs no hashing, skips empty
@@ -11,8 +11,8 @@
 // (|d| <= k alpha) so no loss of precision. The result equals merge_neighbourhood() up to
 // rounding (tests/surface/test_neighbourhood_window.cpp).
 //
-// The cubes H^k(v) (grow, box) with k <= cube_level = K go through a voxel list instead
-// (session 16): the occupied voxels of the region every such cube of the block's vertices lies
+// The cubes H^k(v) (grow, box) with k <= cube_level = K go through a voxel list instead:
+// the occupied voxels of the region every such cube of the block's vertices lies
 // in, [8b - K, 8b + 6 + K]^3, listed once as region coordinates (bytes) and records, in the
 // order add_shell meets them (blocks z, y, x, then layers, then rows). Per vertex, one SIMD pass
 // gives each listed voxel its level, the smallest k with i in H^k(v) = [v - k, v + k - 1]:
@@ -20,10 +20,10 @@
 // The shell H^k \ H^{k-1} is then {L = k} and H^k is {L <= k}, found 16 voxels per compare and
 // added in list order: the very additions, in the very order, of add_shell (so the same bits),
 // without its per-block and per-layer bookkeeping, which was most of a shell's cost on lidar
-// frames (docs/benchmarks.md, session 16). The list depends only on the voxels, the vertex block
-// and K, so the windows of one vertex block, on any thread, may share it (SharedList). Slabs
-// keep a walk over the blocks (add_slab): a list of their wider region (radial extensions) cost
-// more to build than the bookkeeping it saved (session 16).
+// frames. The list depends only on the voxels, the vertex block and K, so the windows of one
+// vertex block, on any thread, may share it (SharedList). Slabs keep a walk over the blocks
+// (add_slab): a list of their wider region (radial extensions) cost more to build than the
+// bookkeeping it saved.
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -54,7 +54,7 @@ public:
     /// Memory for voxel lists that are freed together, when the arena goes: bump allocation from
     /// large chunks. The surface search builds thousands of shared lists per frame; allocating
     /// each (and freeing each, serially, at the end of the frame: ~0.5 ms of a KITTI frame) cost
-    /// more than the arena's few chunks (docs/benchmarks.md, session 29). Not thread-safe: one
+    /// more than the arena's few chunks. Not thread-safe: one
     /// arena per thread.
     class ListArena {
     public:

@@ -1,5 +1,5 @@
 #pragma once
-// What a plane fit needs of a 3x3 covariance, without trigonometry (issue 5): its eigenvalues
+// What a plane fit needs of a 3x3 covariance, without trigonometry: its eigenvalues
 // and the eigenvector of the smallest, the normal. Shifted by the mean eigenvalue T/3 (as Eigen's
 // computeDirect), lambda3 - T/3 is the smallest root of the trace-free matrix's characteristic
 // polynomial, found by Newton's method from left of it, where the polynomial is increasing and
@@ -33,7 +33,7 @@ std::optional<PlaneEigen> plane_eigen(const Eigen::Matrix3d& c);
 /// operations in the same order, no fused multiply-add. A fit costs about a third of the scalar
 /// one this way in a loop of fits alone (bench/surface/bench_surface.cpp, BM_PlaneEigen). The
 /// vertex evaluation does not use it: fitting four vertices' planes together made a frame slower
-/// (docs/benchmarks.md, session 23), as the one-by-one fits' latency is already overlapped there.
+/// (a KITTI frame's time), as the one-by-one fits' latency is already overlapped there.
 std::array<std::optional<PlaneEigen>, 4> plane_eigen4(const std::array<Eigen::Matrix3d, 4>& c);
 
 }  // namespace lidarsurf

@@ -1,4 +1,4 @@
-#include "lidarsurf/core/allocator_tuning.hpp"
+#include "allocator_tuning.hpp"
 
 #include <cstdint>
 #include <cstdlib>
@@ -14,7 +14,7 @@
 #define LIDARSURF_GLIBC_MALLOC 1
 #endif
 
-namespace lidarsurf {
+namespace lidarsurf::cli {
 
 #if defined(LIDARSURF_GLIBC_MALLOC)
 namespace {
@@ -60,7 +60,7 @@ AllocatorTuning tune_allocator() {
 #if defined(LIDARSURF_GLIBC_MALLOC)
     // Blocks below 64 MiB come from the heap (not mapped and unmapped one by one), and the heap's
     // top is given back only beyond 128 MiB: ~300 -> ~36 page faults per KITTI frame, peak memory
-    // unchanged (docs/benchmarks.md, session 23).
+    // unchanged.
     mallopt(M_MMAP_THRESHOLD, static_cast<int>(kMmapThreshold));
     mallopt(M_TRIM_THRESHOLD, 128 << 20);
     done.keeps_freed_memory = true;
@@ -109,4 +109,4 @@ AllocatorTuning release_free_memory() {
     return tune_allocator();
 }
 
-}  // namespace lidarsurf
+}  // namespace lidarsurf::cli

@@ -1,16 +1,17 @@
 #pragma once
-// The process's memory allocator set for meshing frame after frame (issue 5; measured in
-// docs/benchmarks.md, session 24). A frame allocates and frees some 50 MB: with glibc's defaults
+// The CLI's memory allocator, set for meshing frame after frame (measured in docs/benchmarks.md:
+// 1-5 % of a frame). A frame allocates and frees some 50 MB: with glibc's defaults
 // that memory goes back to the system after each frame and is faulted in again, zeroed, for the
 // next, in 4 KiB pages whose translations no longer fit the TLB. tune_allocator() keeps freed
 // memory for reuse and, where the kernel offers transparent huge pages on request (its mode
 // "madvise"), backs the heap with 2 MiB pages: what GLIBC_TUNABLES=glibc.malloc.hugetlb=1 does,
-// which a process cannot set for itself once started. The library never calls it: the CLI does,
-// a program embedding the library may (once, early, before its heap has grown). The price: up to
-// 64 MiB of freed memory stays resident for reuse (release_free_memory() gives it back).
+// which a process cannot set for itself once started. It changes the whole process, so it lives in
+// the CLI, not in the library: a program embedding the library gets the same from the environment,
+// GLIBC_TUNABLES=glibc.malloc.mmap_threshold=67108864:glibc.malloc.trim_threshold=134217728:glibc.malloc.hugetlb=1.
+// The price: up to 64 MiB of freed memory stays resident for reuse (release_free_memory() gives it back).
 #include <string>
 
-namespace lidarsurf {
+namespace lidarsurf::cli {
 
 struct AllocatorTuning {
     /// Freed blocks below 64 MiB are kept for reuse, the heap's top trimmed only beyond 128 MiB.
@@ -38,4 +39,4 @@ AllocatorTuning release_free_memory();
 /// (not Linux, or /sys not mounted).
 std::string transparent_huge_pages_mode();
 
-}  // namespace lidarsurf
+}  // namespace lidarsurf::cli

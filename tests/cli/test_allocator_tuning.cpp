@@ -1,4 +1,4 @@
-#include "lidarsurf/core/allocator_tuning.hpp"
+#include "allocator_tuning.hpp"
 
 #include <cstdint>
 #include <cstdlib>
@@ -15,7 +15,7 @@
 
 namespace {
 
-using lidarsurf::AllocatorTuning;
+using lidarsurf::cli::AllocatorTuning;
 
 // The kernel's view of the mapping that holds `address` (/proc/self/smaps): its name ("[heap]",
 // a file, or empty for an anonymous mapping) and its VmFlags.
@@ -57,7 +57,7 @@ bool sanitized() {
 }
 
 TEST(AllocatorTuning, TransparentHugePagesModeIsTheBracketedWord) {
-    const std::string mode = lidarsurf::transparent_huge_pages_mode();
+    const std::string mode = lidarsurf::cli::transparent_huge_pages_mode();
     std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
     std::string line;
     if (!in || !std::getline(in, line)) {
@@ -72,7 +72,7 @@ TEST(AllocatorTuning, TransparentHugePagesModeIsTheBracketedWord) {
 // heap (glibc's default maps them apart, and unmaps them when freed), and the heap, including its
 // part grown later, is advised for huge pages ("hg" in its VmFlags).
 TEST(AllocatorTuning, TheHeapHoldsLargeBlocksAndIsAdvisedForHugePages) {
-    const AllocatorTuning done = lidarsurf::tune_allocator();
+    const AllocatorTuning done = lidarsurf::cli::tune_allocator();
 #if !defined(__GLIBC__) || !defined(__linux__)
     EXPECT_FALSE(done.keeps_freed_memory);
     EXPECT_FALSE(done.huge_pages);
@@ -98,7 +98,7 @@ TEST(AllocatorTuning, TheHeapHoldsLargeBlocksAndIsAdvisedForHugePages) {
         EXPECT_EQ(first.name, "[heap]") << mib << " MiB";
         const char* tunables = std::getenv("GLIBC_TUNABLES");
         const bool glibc_advises = tunables && std::strstr(tunables, "glibc.malloc.hugetlb=1");
-        const std::string mode = lidarsurf::transparent_huge_pages_mode();
+        const std::string mode = lidarsurf::cli::transparent_huge_pages_mode();
         if (glibc_advises || (mode != "madvise" && mode != "always")) {
             EXPECT_EQ(done.huge_pages, glibc_advises);
             continue;
@@ -133,7 +133,7 @@ bool fresh_block_is_advised(std::size_t mib, std::string& flags) {
 // top, and the freed blocks below the trim threshold): after 96 MiB of blocks are touched and
 // freed, resident memory drops by most of it; the heap is advised again for what comes next.
 TEST(AllocatorTuning, ReleaseGivesFreedMemoryBackAndAdvisesTheHeapAgain) {
-    const AllocatorTuning tuned = lidarsurf::tune_allocator();
+    const AllocatorTuning tuned = lidarsurf::cli::tune_allocator();
     if (!tuned.keeps_freed_memory) GTEST_SKIP() << "allocator left alone here";
     if (std::ifstream("/proc/self/statm").fail()) GTEST_SKIP() << "no /proc/self/statm";
     std::vector<void*> blocks;
@@ -144,7 +144,7 @@ TEST(AllocatorTuning, ReleaseGivesFreedMemoryBackAndAdvisesTheHeapAgain) {
     }
     for (auto it = blocks.rbegin(); it != blocks.rend(); ++it) std::free(*it);  // the top last
     const double kept = resident_mib();
-    const AllocatorTuning again = lidarsurf::release_free_memory();
+    const AllocatorTuning again = lidarsurf::cli::release_free_memory();
     const double released = resident_mib();
     EXPECT_LT(released, kept - 48.0) << "resident " << kept << " MiB before, " << released << " after";
     EXPECT_EQ(again.huge_pages, tuned.huge_pages);
@@ -158,7 +158,7 @@ TEST(AllocatorTuning, ReleaseGivesFreedMemoryBackAndAdvisesTheHeapAgain) {
 // sanitizer, THP on request or always, glibc not advising the heap itself, /proc readable).
 bool tune_allocator_advises_here() {
     const char* tunables = std::getenv("GLIBC_TUNABLES");
-    const std::string mode = lidarsurf::transparent_huge_pages_mode();
+    const std::string mode = lidarsurf::cli::transparent_huge_pages_mode();
 #if defined(__GLIBC__) && defined(__linux__)
     return !sanitized() && !tunables && (mode == "madvise" || mode == "always") && !std::ifstream("/proc/self/smaps").fail();
 #else
@@ -172,13 +172,13 @@ bool tune_allocator_advises_here() {
 // and the one above when other tests had run first in the same process, failed.)
 TEST(AllocatorTuning, AFragmentedHeapIsStillGrownAndAdvised) {
     if (!tune_allocator_advises_here()) GTEST_SKIP() << "tune_allocator() does not advise the heap itself here";
-    lidarsurf::release_free_memory();
+    lidarsurf::cli::release_free_memory();
     void* hole = std::malloc(std::size_t{4} << 20);
     void* pin = std::malloc(std::size_t{1} << 10);  // keeps the hole from merging into the top
     ASSERT_TRUE(hole && pin);
     std::memset(hole, 1, std::size_t{4} << 20);
     std::free(hole);
-    const AllocatorTuning done = lidarsurf::release_free_memory();
+    const AllocatorTuning done = lidarsurf::cli::release_free_memory();
     EXPECT_TRUE(done.huge_pages);
     std::string flags;
     EXPECT_TRUE(fresh_block_is_advised(16, flags)) << "VmFlags" << flags;
@@ -196,7 +196,7 @@ TEST(AllocatorTuning, TheHeapIsAdvisedWithOtherThreadsArenas) {
         if (theirs) std::memset(theirs, 1, std::size_t{8} << 20);
     }).join();
     ASSERT_NE(theirs, nullptr);
-    const AllocatorTuning done = lidarsurf::release_free_memory();
+    const AllocatorTuning done = lidarsurf::cli::release_free_memory();
     EXPECT_TRUE(done.huge_pages);
     std::string flags;
     EXPECT_TRUE(fresh_block_is_advised(16, flags)) << "VmFlags" << flags;
