@@ -94,9 +94,11 @@ install: build
 package-check: build
 	rm -rf $(BUILD)/pkg-prefix $(BUILD)/pkg-consumer
 	cmake --install $(BUILD) --prefix $(BUILD)/pkg-prefix
+	bash tests/package/check_installed.sh $(BUILD)/pkg-prefix $(BUILD)
 	cmake -S tests/package -B $(BUILD)/pkg-consumer -DCMAKE_PREFIX_PATH=$(CURDIR)/$(BUILD)/pkg-prefix
 	cmake --build $(BUILD)/pkg-consumer
 	$(BUILD)/pkg-consumer/consumer
+	$(BUILD)/pkg-consumer/consumer_sim
 	bash tests/package/readme_consumer.sh $(BUILD)
 
 # The Python package as pip builds and installs it, offline: a wheel from pyproject.toml, installed

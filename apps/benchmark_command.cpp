@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "file_roles.hpp"
+#include "progress.hpp"
 #include "lidarsurf/eval/benchmark.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
@@ -119,7 +120,7 @@ CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
         "  lidarsurf simulate -o town && lidarsurf benchmark town\n"
         "  lidarsurf benchmark town --frames 10 --methods 'AN+GC kmax=5,IMLS'\n"
         "  lidarsurf benchmark town --methods 'AN+GC kmax=5' --peers town/peers\n"
-        "  lidarsurf benchmark town --methods default --slab 0   (the default row with other settings)\n"
+        "  lidarsurf benchmark town --methods default --slab-from-level 0   (the default row with other settings)\n"
         "Reads DIR/velodyne and DIR/gt (KITTI layout, sensor frame); with DIR/scene.ply and poses.txt\n"
         "also the true surface (plus DIR/objects/NNNNNN.ply). Writes DIR/benchmark/table.txt,\n"
         "results.csv, results.json and, with python3-matplotlib, fig6a_range.png and fig6b_delta.png.\n");
@@ -132,10 +133,11 @@ CLI::App* add_benchmark_command(CLI::App& app, BenchmarkOptions& o) {
     b->add_option("--max-range", o.max_range, "Evaluate only within this range of the sensor (0 = all)")->capture_default_str();
     b->add_flag("--ablation", o.ablation, "Run the ablation rows (paper AN+GC to the default, one guard at a time) instead of Table I");
     b->add_flag("--no-plots", o.no_plots, "Do not draw the figures");
+    b->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     // The configuration of the default row (and the ablation's end point); Table I's rows take
     // alpha, tau and N_min from it, the rest from the paper.
     add_config_options(b, o.config, false);
-    b->add_option("--threads", o.config.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    add_run_options(b, o.config);
     return b;
 }
 
@@ -187,7 +189,7 @@ int run_benchmark(const BenchmarkOptions& o) {
     for (const auto& m : methods) names.push_back(m.name);
     for (const auto& m : peers) names.push_back(m.name);
     BenchmarkAccumulator acc(names);
-    const auto t_start = std::chrono::steady_clock::now();
+    Progress progress("benchmark", "frames", frames.size(), o.quiet);
     for (std::size_t f = 0; f < frames.size(); ++f) {
         const std::size_t i = frames[f];
         PointCloud scan = read_points(seq.scan(i));
@@ -210,9 +212,9 @@ int run_benchmark(const BenchmarkOptions& o) {
             const auto t = peers[p].seconds.find(i);
             add(methods.size() + p, fs::exists(file) ? read_mesh(file) : Mesh{}, t == peers[p].seconds.end() ? 0.0 : t->second);
         }
-        std::fprintf(stderr, "benchmark: frame %zu (%zu/%zu), %zu methods, %.0f s elapsed\n", i, f + 1, frames.size(), methods.size(),
-                     ms_since(t_start) / 1e3);
+        progress.update(f + 1, "frame " + KittiSequence::frame_name(i) + ", " + std::to_string(methods.size() + peers.size()) + " rows");
     }
+    progress.finish();
     std::string label = o.dir + (o.ablation ? " (ablation)" : "");
     const BenchmarkResult result = acc.finish(label, frames.size());
     const std::string table = format_table_one(result) + "\n" + format_true_surface(result);

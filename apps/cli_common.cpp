@@ -48,40 +48,61 @@ int exit_code(const Error& e) {
 }
 
 
+namespace {
+
+// An option under the name of its Config field (kebab-case) with its earlier spelling kept as a
+// hidden alias (not in --help) for one release. Returns both options.
+template <typename T>
+std::vector<CLI::Option*> field_option(CLI::App* app, const std::string& name, const std::string& alias, T& value, const std::string& help) {
+    std::vector<CLI::Option*> out{app->add_option(name, value, help)->capture_default_str()};
+    if (!alias.empty()) out.push_back(app->add_option(alias, value, "alias of " + name)->group(""));
+    return out;
+}
+
+}  // namespace
+
 std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig& c, bool with_constant_level) {
-    app->add_option("--voxel", c.voxel_size, "Voxel size alpha in metres")->capture_default_str();
-    app->add_option("--tau", c.tau, "Gaussian confidence threshold tau, Eq. (3)")->capture_default_str();
-    app->add_option("--nmin", c.n_min, "Minimum points N_min in a neighbourhood, Eq. (1)")->capture_default_str();
-    app->add_option("--kmax", c.k_max, "Largest neighbourhood level k_max (adaptive modes)")->capture_default_str();
-    if (with_constant_level) app->add_option("--k", c.k, "Neighbourhood level k (constant modes cn, cn+gc)")->capture_default_str();
-    std::vector<CLI::Option*> guards{
-        app->add_option("--min-planarity", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"),
-        app->add_option("--max-thickness", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"),
-        app->add_option("--slab", c.slab_from_level,
-                        "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"),
-        app->add_option("--slab-radial", c.slab_radial_extension,
-                        "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"),
-        app->add_option("--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"),
-        app->add_option("--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"),
-        app->add_option("--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"),
-        app->add_option("--seed-dilation", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"),
-        app->add_option("--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"),
-    };
-    for (auto* opt : guards) opt->capture_default_str();
+    field_option(app, "--voxel-size", "--voxel", c.voxel_size, "Voxel size alpha in metres");
+    field_option(app, "--tau", "", c.tau, "Gaussian confidence threshold tau, Eq. (3)");
+    field_option(app, "--n-min", "--nmin", c.n_min, "Minimum points N_min in a neighbourhood, Eq. (1)");
+    field_option(app, "--k-max", "--kmax", c.k_max, "Largest neighbourhood level k_max (adaptive modes)");
+    if (with_constant_level) field_option(app, "--k", "", c.k, "Neighbourhood level k (constant modes cn, cn+gc)");
+    std::vector<CLI::Option*> guards;
+    auto guard = [&guards](std::vector<CLI::Option*> options) { guards.insert(guards.end(), options.begin(), options.end()); };
+    guard(field_option(app, "--min-planarity", "", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"));
+    guard(field_option(app, "--max-thickness", "", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"));
+    guard(field_option(app, "--slab-from-level", "--slab", c.slab_from_level,
+                       "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"));
+    guard(field_option(app, "--slab-radial-extension", "--slab-radial", c.slab_radial_extension,
+                       "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"));
+    guard(field_option(app, "--truncation-voxels", "--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"));
+    guard(field_option(app, "--snap-to-plane", "--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"));
+    guard(field_option(app, "--seeded-surface", "--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"));
+    guard(field_option(app, "--seed-dilation", "", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"));
+    guard(field_option(app, "--min-component-triangles", "--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"));
     return guards;
+}
+
+void add_run_options(CLI::App* app, ReconstructionConfig& c) {
+    field_option(app, "--max-memory-mb", "--max-memory", c.max_memory_mb,
+                 "Memory budget in MiB: refuse (exit 5, with the estimate) an input or a reconstruction needing more");
+    field_option(app, "--threads", "", c.threads, "Worker threads (0 = all cores)");
 }
 
 void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
     ReconstructionConfig& c = o.config;
-    app->add_option("--method", o.method, "paper (Roldao et al., --mode selects the variant) | imls (baseline)")->capture_default_str();
+    app->add_option("--method", o.method,
+                    "default (lidarsurf: the paper's AN+GC with its guards) | paper (the paper as written, --mode selects "
+                    "the variant; = --literal) | imls (the paper's baseline)")
+        ->capture_default_str();
     const std::vector<CLI::Option*> guards = add_config_options(app, c, true);
     app->add_option("--mode", o.mode, "an+gc | an | cn+gc | cn (Sec. IV-B)")->capture_default_str();
     app->add_option("--origin", o.origin, "Sensor position x,y,z (orients the normals, Eq. 2)")->capture_default_str();
     auto* literal = app->add_flag("--literal", o.literal,
-                                  "The paper as written: no planarity or thickness guard, no slab fallback, no truncation, every defined cube, no snapping");
+                                  "The paper as written (= --method paper): no planarity or thickness guard, no slab fallback, no "
+                                  "truncation, every defined cube, no snapping");
     for (auto* opt : guards) opt->excludes(literal);
-    app->add_option("--max-memory", c.max_memory_mb, "Memory budget in MiB: refuse (exit 5, with the estimate) a cloud needing more")->capture_default_str();
-    app->add_option("--threads", c.threads, "Worker threads (0 = all cores)")->capture_default_str();
+    add_run_options(app, c);
     app->add_option("--simd", o.simd, "Vector instructions of the fast path: sse2 | avx2 | avx512 (default: the widest this CPU has; "
                                       "every level gives the same mesh, bit for bit)");
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
@@ -99,10 +120,11 @@ Method resolve_method(const ReconstructOptions& o) {
     Method m;
     m.config = o.config;
     m.config.mode = parse_mode(o.mode);
-    if (o.literal) m.config.make_paper_literal();
+    if (o.method != "default" && o.method != "paper" && o.method != "imls")
+        throw InvalidArgument("unknown method '" + o.method + "' (expected default, paper or imls)");
+    if (o.literal || o.method == "paper") m.config.make_paper_literal();
     m.config.validate();
-    if (o.method == "imls") m.imls = true;
-    else if (o.method != "paper") throw InvalidArgument("unknown method '" + o.method + "' (expected paper or imls)");
+    m.imls = o.method == "imls";
     m.sensor = parse_vec3(o.origin, "--origin");
     m.read.format = parse_point_format(o.format);
     m.read.bin_fields = o.bin_fields;

@@ -20,13 +20,17 @@ Eigen::Vector3d parse_vec3(const std::string& text, const char* what);
 /// 2: the user's arguments; 3: the data; 4: the file system; 5: over the memory budget; 1: anything else.
 int exit_code(const Error& e);
 
-/// The ReconstructionConfig options (--voxel, --tau, --nmin, --kmax, [--k,] the guards), filling
-/// `c` whose values are the defaults shown. Returns the guard options (the ones --literal excludes).
+/// The ReconstructionConfig options, named as its fields in kebab-case (--voxel-size, --tau,
+/// --n-min, --k-max, [--k,] the guards; the earlier spellings --voxel, --nmin, --kmax, --slab, ...
+/// as hidden aliases), filling `c` whose values are the defaults shown. Returns the guard options
+/// (the ones --literal excludes).
 std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig& c, bool with_constant_level);
+/// --max-memory-mb and --threads (ReconstructionConfig's run settings).
+void add_run_options(CLI::App* app, ReconstructionConfig& c);
 
 /// Options shared by `reconstruct`, `evaluate --holdout`, `bench` and `fuse`.
 struct ReconstructOptions {
-    std::string format = "auto", origin = "0,0,0", mode = "an+gc", method = "paper";
+    std::string format = "auto", origin = "0,0,0", mode = "an+gc", method = "default";
     std::string simd;  // empty: the widest this CPU has (core/simd.hpp)
     int bin_fields = 4;
     ReconstructionConfig config;  // paper defaults, defined once in ReconstructionConfig

@@ -14,6 +14,7 @@ namespace lidarsurf::cli {
 struct SimulateOptions {
     std::string scene = "town", sensor = "hdl64", output, gt, from, to;
     bool gt_given = false;  // --gt given, even with an empty name (an error)
+    bool quiet = false;     // no progress report
     int frames = 100, gt_beams = 316, moving_cars = 3;
     double length = 240.0;
     std::uint64_t seed = 1;
@@ -32,7 +33,7 @@ int run_render(const RenderOptions& o);
 struct BenchmarkOptions {
     std::string dir, out, methods, peers;
     int frames = 0, stride = 1;
-    bool no_plots = false, ablation = false;
+    bool no_plots = false, ablation = false, quiet = false;
     double max_range = 0;
     ReconstructionConfig config;  // alpha, tau, N_min, guards, threads; the rows set mode and k
 };
@@ -54,6 +55,7 @@ int run_bench(const BenchOptions& o);
 struct FuseOptions {
     std::string dir, output, mesh_format = "auto", calib;
     int first = 0, frames = 0, step = 1, remesh_every = 0;
+    bool quiet = false;  // no progress report
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
 };
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);

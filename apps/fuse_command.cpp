@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "file_roles.hpp"
+#include "progress.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 
@@ -31,6 +32,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("--remesh-every", o.remesh_every,
                   "Also extract the mesh after every this many fused frames, printing its time (0 = only at the end)")
         ->capture_default_str();
+    f->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     add_reconstruct_options(f, o.reconstruct);
     f->footer("--origin is the sensor's position in the scan frame (0,0,0 for KITTI's velodyne frame).\n"
               "Poses map the scan frame to the world; KITTI's published poses are the left camera's: give\n"
@@ -71,6 +73,7 @@ int run_fuse(const FuseOptions& o) {
     Mesh mesh;
     double read_ms = 0;
     bool fresh = false;  // whether `mesh` holds every frame fused so far
+    Progress progress("fuse", "frames", frames.size(), o.quiet);
     for (std::size_t n = 0; n < frames.size(); ++n) {
         const std::size_t i = frames[n];
         auto t0 = std::chrono::steady_clock::now();
@@ -80,6 +83,7 @@ int run_fuse(const FuseOptions& o) {
         read_ms += ms_since(t0);
         rec.integrate(cloud.points, pose * m.sensor);
         fresh = false;
+        progress.update(n + 1, std::to_string(rec.summary().voxels) + " voxels");
         if (o.remesh_every > 0 && ((n + 1) % static_cast<std::size_t>(o.remesh_every) == 0 || n + 1 == frames.size())) {
             mesh = rec.extract_mesh();
             fresh = true;
@@ -90,6 +94,7 @@ int run_fuse(const FuseOptions& o) {
             std::fflush(report);
         }
     }
+    progress.finish(std::to_string(rec.summary().voxels) + " voxels");
     if (!fresh) mesh = rec.extract_mesh();
     if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
     const auto t0 = std::chrono::steady_clock::now();

@@ -1,6 +1,6 @@
 // lidarsurf command-line tool. The only place where library exceptions become messages and
 // exit codes: 0 success, 1 internal error, 2 bad arguments, 3 bad input data, 4 file system error,
-// 5 over the memory budget (--max-memory).
+// 5 over the memory budget (--max-memory-mb).
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -180,7 +180,7 @@ int main(int argc, char** argv) {
         "Examples:\n"
         "  lidarsurf reconstruct 000000.bin -o mesh.ply\n"
         "  lidarsurf reconstruct scan.pcd -o mesh.obj --mode cn --k 3 --origin 0,0,1.73\n"
-        "  lidarsurf reconstruct sweep.bin --bin-fields 5 -o mesh.ply --voxel 0.1 --threads 2\n"
+        "  lidarsurf reconstruct sweep.bin --bin-fields 5 -o mesh.ply --voxel-size 0.1 --threads 2\n"
         "  lidarsurf reconstruct 000000.bin -o imls.ply --method imls\n");
     rc->add_option("input", input, "Input point cloud (.bin KITTI, .ply, .pcd, .xyz/.csv/.txt)")->required();
     rc->add_option("-o,--output", output, "Output mesh (.ply binary by default, .obj)")->required();
@@ -243,7 +243,7 @@ int main(int argc, char** argv) {
     } catch (const Error& e) {
         return fail("error", e.what(), exit_code(e));
     } catch (const std::bad_alloc&) {
-        return fail("error", "out of memory: the system refused an allocation; use a larger voxel size, split the input, or set --max-memory", 5);
+        return fail("error", "out of memory: the system refused an allocation; use a larger voxel size, split the input, or set --max-memory-mb", 5);
     } catch (const std::length_error& e) {
         return fail("error", std::string("out of memory: a size beyond what can be allocated (") + e.what() + ")", 5);
     } catch (const std::exception& e) {

@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "file_roles.hpp"
+#include "progress.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
@@ -108,6 +109,7 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
     sc->add_option("--seed", o.seed, "Scene and noise seed")->capture_default_str();
     sc->add_option("--length", o.length, "Street / track length in metres (town, offroad)")->capture_default_str();
     sc->add_option("--moving-cars", o.moving_cars, "Cars driving in the opposite lane (town)")->capture_default_str();
+    sc->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     sc->add_option("--from", o.from, "Mesh scene: ground point where the drive starts, x,y,z");
     sc->add_option("--to", o.to, "Mesh scene: ground point where it ends (default 10 m along +x)");
     return sc;
@@ -149,7 +151,7 @@ int run_simulate(const SimulateOptions& o) {
     write_text(seq.sensor().string(), cfg.sensor.to_json());
     std::vector<Eigen::Isometry3d> poses;
     std::size_t points = 0;
-    const auto t0 = std::chrono::steady_clock::now();
+    Progress progress("simulate", "frames", simulator.frame_count(), o.quiet);
     for (std::size_t i = 0; i < simulator.frame_count(); ++i) {
         const sim::SimulatedFrame f = simulator.frame(i);
         write_points(f.scan, seq.scan(i));
@@ -157,11 +159,11 @@ int run_simulate(const SimulateOptions& o) {
         if (!f.movers.empty()) write_mesh(f.movers, seq.objects(i));
         poses.push_back(f.pose);
         points += f.scan.points.size();
-        if ((i + 1) % 10 == 0 || i + 1 == simulator.frame_count())
-            std::fprintf(stderr, "simulate: frame %zu/%zu (%.1f s)\n", i + 1, simulator.frame_count(), ms_since(t0) / 1e3);
+        progress.update(i + 1);
     }
     write_poses(poses, seq.poses());
     out.commit();
+    progress.finish();
     std::printf("simulated %zu frames of scene %s with %s (%.0f points per frame, seed %llu, %zu scene triangles) -> %s\n",
                 simulator.frame_count(), o.scene.c_str(), cfg.sensor.name.c_str(),
                 static_cast<double>(points) / static_cast<double>(simulator.frame_count()), static_cast<unsigned long long>(o.seed),

@@ -154,7 +154,7 @@ std::string Reconstructor::over_budget(const std::string& what, double bytes, co
     char buf[160];
     std::snprintf(buf, sizeof buf, " would need about %.0f MiB, above the memory budget of %.0f MiB (", bytes / 1048576.0,
                   config_.max_memory_mb);
-    return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (max_memory_mb, CLI --max-memory)";
+    return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (max_memory_mb, CLI --max-memory-mb)";
 }
 
 std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,

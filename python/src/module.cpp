@@ -97,7 +97,8 @@ Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin,
     const PointArray view = points_view(points, "points");
     const Eigen::Vector3d sensor = as_vec3(origin, "origin");
     m.imls = method && *method == "imls";
-    if (method && !m.imls) m.config.mode = parse_mode(*method);  // InvalidArgument names the choices
+    if (method && *method == "paper") m.config.make_paper_literal();  // the paper as written, in config's mode
+    else if (method && !m.imls && *method != "default") m.config.mode = parse_mode(*method);  // InvalidArgument names the choices
     m.config.validate();
     m.imls_config = ImlsConfig::matching(m.config);
     m.validate();
@@ -336,8 +337,9 @@ PYBIND11_MODULE(_lidarsurf, m) {
     m.def("reconstruct", &reconstruct_py, py::arg("points"), py::arg("origin") = std::vector<double>{0, 0, 0},
           py::arg("config") = py::none(), py::arg("method") = py::none(),
           "Reconstruct a mesh from an (N, 3) float32/float64 array of points seen from `origin` (the sensor).\n"
-          "config: a Config (paper defaults when None). method: None (config.mode), a mode name ('an+gc', 'an',\n"
-          "'cn+gc', 'cn') overriding config.mode, or 'imls' for the IMLS baseline with the matching settings.\n"
+          "config: a Config (lidarsurf's defaults when None). method: None or 'default' (config as it is), 'paper' (the\n"
+          "paper as written in config's mode, as Config.paper()), a mode name ('an+gc', 'an', 'cn+gc', 'cn') overriding\n"
+          "config.mode, or 'imls' for the paper's IMLS baseline with the matching settings. The CLI's --method takes the same names.\n"
           "Raises ValueError on a bad parameter or non-finite points.");
 
     m.def(

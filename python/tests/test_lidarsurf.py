@@ -192,6 +192,14 @@ def test_mesh_arrays_are_read_only(scan):
     copy[0] = 0  # a copy is the user's
 
 
+def test_method_names_are_the_clis(scan):
+    default = lidarsurf.reconstruct(scan)
+    assert np.array_equal(lidarsurf.reconstruct(scan, method="default").triangles, default.triangles)
+    paper = lidarsurf.reconstruct(scan, method="paper")  # the paper as written, as --method paper
+    assert np.array_equal(paper.triangles, lidarsurf.reconstruct(scan, config=lidarsurf.Config.paper()).triangles)
+    assert len(paper.triangles) != len(default.triangles)
+
+
 def test_empty_cloud_raises_value_error():
     with pytest.raises(ValueError, match="no points"):
         lidarsurf.reconstruct(np.zeros((0, 3)))

@@ -25,7 +25,7 @@ namespace detail {
 namespace {
 std::string over_limit(const std::string& path, std::size_t max_bytes) {
     return path + ": the input holds more than the memory budget of " + std::to_string(max_bytes >> 20) +
-           " MiB; raise the budget (--max-memory) or split the input";
+           " MiB; raise the budget (--max-memory-mb) or split the input";
 }
 }  // namespace
 

@@ -130,5 +130,31 @@ expect 2 "describe the scans you pass" -- "$cli" bench --bin-fields 5
 expect 2 "repeat" -- "$cli" bench "$dir/scan.bin" --repeat 0
 expect 2 "voxel size" -- "$cli" bench "$dir/scan.bin" --voxel 0
 expect 4 "cannot read" -- "$cli" bench "$dir/missing.bin"
+# One vocabulary: the options carry the ReconstructionConfig field names (kebab-case); the earlier
+# spellings are hidden aliases with the same effect; "paper" is the paper as written everywhere.
+"$cli" reconstruct "$dir/scan.bin" -o "$dir/v_new.ply" --voxel-size 0.25 --n-min 12 --k-max 4 --slab-from-level 4 --truncation-voxels 1.2 >/dev/null
+"$cli" reconstruct "$dir/scan.bin" -o "$dir/v_old.ply" --voxel 0.25 --nmin 12 --kmax 4 --slab 4 --truncation 1.2 >/dev/null
+check "the old spellings give the same mesh" -- cmp -s "$dir/v_new.ply" "$dir/v_old.ply"
+check "the old spellings are not in --help" -- bash -c "! '$cli' reconstruct --help | grep -qE -- '--(voxel|nmin|kmax|slab|truncation|snap|seeded|min-component|max-memory) '"
+check "--help names the field names" -- bash -c "'$cli' reconstruct --help | grep -q -- '--slab-radial-extension'"
+"$cli" reconstruct "$dir/scan.bin" -o "$dir/m_paper.ply" --method paper >/dev/null
+"$cli" reconstruct "$dir/scan.bin" -o "$dir/m_literal.ply" --literal >/dev/null
+"$cli" reconstruct "$dir/scan.bin" -o "$dir/m_default.ply" --method default >/dev/null
+"$cli" reconstruct "$dir/scan.bin" -o "$dir/m_plain.ply" >/dev/null
+check "--method paper is the paper as written (--literal)" -- cmp -s "$dir/m_paper.ply" "$dir/m_literal.ply"
+check "--method default is the default" -- cmp -s "$dir/m_default.ply" "$dir/m_plain.ply"
+check "and the two differ" -- bash -c "! cmp -s '$dir/m_paper.ply' '$dir/m_default.ply'"
+expect 2 "unknown method" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/x.ply" --method tsdf
+# Progress on stderr: plain lines when it is not a terminal, a bar redrawn in place on one (a
+# pseudo-terminal from script(1)), nothing with --quiet; stdout keeps the report alone.
+"$cli" fuse "$seq" -o "$dir/p.ply" >"$dir/p.out" 2>"$dir/p.err"
+check "fuse: plain progress lines off a terminal" -- grep -qE '^fuse: [0-9]+/[0-9]+ frames \(100 %\)' "$dir/p.err"
+check "fuse: no progress on stdout" -- bash -c "! grep -q 'fuse: ' '$dir/p.out'"
+"$cli" fuse "$seq" -o "$dir/p.ply" --quiet >/dev/null 2>"$dir/q.err"
+check "fuse --quiet: nothing on stderr" -- test ! -s "$dir/q.err"
+if command -v script >/dev/null; then
+  TERM=xterm script -qec "'$cli' fuse '$seq' -o '$dir/t.ply' >/dev/null" /dev/null >"$dir/t.err" 2>&1
+  check "fuse on a terminal: a bar redrawn in place" -- bash -c "grep -aq \$'\r' '$dir/t.err' && grep -aq '\[#' '$dir/t.err'"
+fi
 echo "cli: $passed passed, $fail failed"
 [ "$fail" -eq 0 ]
