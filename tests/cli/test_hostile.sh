@@ -135,7 +135,7 @@ check "SIGTERM during bench exits 143 (got $rc)" -- test "$rc" -eq 143
 check "bench's scratch files are removed" -- test -z "$(ls -d /tmp/lidarsurf-bench.tmp.$pid.* 2>/dev/null)"
 mkfifo slow_input.bin
 "$cli" reconstruct slow_input.bin -o mesh.ply --format bin >/dev/null 2>hup.txt & pid=$!
-exec 3>slow_input.bin; head -c 160000 scan.bin >&3
+exec 3<>slow_input.bin; timeout 20 head -c 160000 scan.bin >&3  # read-write open and a time limit: no hang if the reader is gone
 sleep 0.5; kill -HUP $pid; wait $pid; rc=$?; exec 3>&-
 check "SIGHUP while reading exits 129 (got $rc)" -- test "$rc" -eq 129
 check "and says so" -- grep -q "interrupted by HUP" hup.txt
