@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl install package-check pip-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl install package-check pip-check viewer-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -100,6 +100,12 @@ package-check: build
 	$(BUILD)/pkg-consumer/consumer
 	$(BUILD)/pkg-consumer/consumer_sim
 	bash tests/package/readme_consumer.sh $(BUILD)
+
+# The page `lidarsurf view` writes, in headless Chromium (Debian's chromium, installed by
+# `setup.sh viewer`): screenshots coloured by height and by level (scripts/viewer_check.sh).
+viewer-check: build
+	@bash scripts/setup.sh viewer
+	bash scripts/viewer_check.sh $(BUILD)/bin/lidarsurf $(CURDIR)/$(BUILD)/viewer-check
 
 # The Python package as pip builds and installs it, offline: a wheel from pyproject.toml, installed
 # into a fresh venv (--system-site-packages) and for the system Python; the README's Python lines

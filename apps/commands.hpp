@@ -61,4 +61,11 @@ struct FuseOptions {
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);
 int run_fuse(const FuseOptions& o);
 
+struct ViewOptions {
+    std::string input, output, points, colour = "height", title;
+    int max_points = 200000;
+};
+CLI::App* add_view_command(CLI::App& app, ViewOptions& o);
+int run_view(const ViewOptions& o);
+
 }  // namespace lidarsurf::cli

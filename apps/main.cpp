@@ -222,6 +222,8 @@ int main(int argc, char** argv) {
     auto* bn = add_bench_command(app, bno);
     FuseOptions fo;
     auto* fu = add_fuse_command(app, fo);
+    ViewOptions vo;
+    auto* vw = add_view_command(app, vo);
 
     try {
         app.parse(argc, argv);
@@ -240,6 +242,7 @@ int main(int argc, char** argv) {
             return run_bench(bno);
         }
         if (*fu) return run_fuse(fo);
+        if (*vw) return run_view(vo);
     } catch (const Error& e) {
         return fail("error", e.what(), exit_code(e));
     } catch (const std::bad_alloc&) {

@@ -19,6 +19,9 @@ PKGS=(
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
 )
+# npm fetches three.js for the viewer (below); a machine with Node.js from elsewhere has npm already,
+# and Debian's npm package would conflict with it.
+if ! command -v npm >/dev/null; then PKGS+=(npm); fi
 # `setup.sh fuzz`: also clang and its libFuzzer runtime (make fuzz); `setup.sh tsan`: the tools
 # that fetch and check Debian's oneTBB source (make tsan, scripts/build_tbb_tsan.sh); `setup.sh
 # peers`: Open3D for the accuracy benchmark's peers (make accuracy).
@@ -28,6 +31,8 @@ if [ "${1:-}" = "tsan" ]; then PKGS+=(curl xz-utils ca-certificates); fi
 if [ "${1:-}" = "peers" ]; then PKGS+=(python3-open3d); fi
 # `setup.sh pcl`: PCL for tools/pcl_peer (make accuracy-pcl; about 380 packages).
 if [ "${1:-}" = "pcl" ]; then PKGS+=(libpcl-dev); fi
+# `setup.sh viewer`: Chromium, which renders the viewer's page in its test (make viewer-check).
+if [ "${1:-}" = "viewer" ]; then PKGS+=(chromium); fi
 
 missing=()
 for p in "${PKGS[@]}"; do
@@ -35,11 +40,18 @@ for p in "${PKGS[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#PKGS[@]} packages present"
-  exit 0
+else
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "setup: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# three.js for the viewer: the pinned version of viewer/package-lock.json, once, into
+# viewer/node_modules (the CLI's build embeds it in every HTML file `lidarsurf view` writes).
+viewer="$(cd "$(dirname "$0")/.." && pwd)/viewer"
+if [ ! -f "$viewer/node_modules/three/build/three.min.js" ]; then
+  echo "setup: npm ci in $viewer (three.js for lidarsurf view)"
+  (cd "$viewer" && npm ci --no-audit --no-fund --loglevel=error)
+fi

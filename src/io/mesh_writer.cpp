@@ -144,6 +144,7 @@ Mesh parse_mesh(std::string_view data, MeshFormat format, const std::string& nam
         mesh.vertices = std::move(content.vertices);
         mesh.triangles = std::move(content.triangles);
         if (content.levels.size() == mesh.vertices.size()) mesh.levels = std::move(content.levels);
+        if (content.confidence.size() == mesh.vertices.size()) mesh.confidence = std::move(content.confidence);
         return mesh;
     }
     std::string_view rest = data;

@@ -39,6 +39,10 @@ TEST(MeshWriter, RoundTripsEveryFormat) {
             ASSERT_EQ(r.vertices.size(), m.vertices.size()) << file;
             ASSERT_EQ(r.triangles, m.triangles) << file;
             for (std::size_t i = 0; i < m.vertices.size(); ++i) EXPECT_LT((r.vertices[i] - m.vertices[i]).norm(), 1e-6) << file;
+            if (fmt != MeshFormat::Obj) {  // a PLY reads back k' and the confidence too
+                EXPECT_EQ(r.levels, m.levels) << file;
+                EXPECT_EQ(r.confidence, m.confidence) << file;
+            }
         }
     }
     // The PLY keeps k' and confidence for colouring.

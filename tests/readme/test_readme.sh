@@ -11,7 +11,7 @@ cd "$dir"
 /usr/bin/python3 "$root/scripts/readme_snippets.py" cli "$root/README.md" > cli.sh
 /usr/bin/python3 "$root/scripts/readme_snippets.py" python "$root/README.md" > snippet.py
 PATH="$build/bin:$PATH" bash -eu cli.sh > cli.log 2>&1 || { cat cli.log; echo "FAIL: the README's command-line snippet"; exit 1; }
-for f in scan.bin mesh.ply map.ply; do
+for f in scan.bin mesh.ply map.ply mesh.html; do
   [ -s "$f" ] || { echo "FAIL: the command-line snippet left no $f"; exit 1; }
 done
 PYTHONPATH="$build/python" /usr/bin/python3 snippet.py > python.log 2>&1 || { cat python.log; echo "FAIL: the README's Python snippet"; exit 1; }
