@@ -420,7 +420,7 @@ int run_bench(const BenchOptions& o) {
     }
     FileRoles files;
     for (const std::string& s : o.scans) files.input(s);
-    if (o.json_given || !o.json.empty()) files.output(o.json, "--json");
+    if (o.json_given) files.output(o.json, "--json");
     files.check();
 
     Inputs in;
@@ -518,7 +518,7 @@ int run_bench(const BenchOptions& o) {
                         sector_scan.c_str());
             std::fputs(format_rows(sector_rows, true).c_str(), stdout);
         }
-        if (o.json_given || !o.json.empty()) {
+        if (o.json_given) {
             nlohmann::json j;
             j["machine"] = machine;
             for (const char* key : {"rows", "sizes", "threads", "sectors"}) j[key] = nlohmann::json::array();

@@ -72,7 +72,6 @@ struct EvaluateOptions {
     bool json_given = false, mesh_out_given = false;  // an option given with an empty name is an error
 };
 
-bool eo_given_json(const EvaluateOptions& o) { return o.json_given || !o.json.empty(); }
 
 // Ground truth as points: a point file, or a mesh (.obj, or .ply with faces) sampled densely.
 std::vector<Eigen::Vector3d> read_ground_truth(const std::string& path, const EvaluateOptions& o) {
@@ -97,7 +96,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     if (!std::isfinite(o.gt_spacing) || o.gt_spacing <= 0) throw InvalidArgument("--gt-spacing must be finite and > 0");
     FileRoles files;
     for (const std::string& in : o.inputs) files.input(in);
-    if (eo_given_json(o)) files.output(o.json, "--json");
+    if (o.json_given) files.output(o.json, "--json");
     if (o.mesh_out_given) files.output(o.mesh_out, "--mesh-out");
     files.check();
     if (o.mesh_out_given) mesh_format_for(o.mesh_out);  // an unknown extension: exit 2 now
@@ -133,7 +132,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     }
     const EvaluationResult result = evaluate(mesh, gt, ec);
     std::printf("%s%s", header.c_str(), format_table(result).c_str());
-    if (eo_given_json(o)) write_text(o.json, to_json(result));
+    if (o.json_given) write_text(o.json, to_json(result));
     return 0;
 }
 

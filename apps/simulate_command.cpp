@@ -18,7 +18,6 @@ namespace fs = std::filesystem;
 namespace lidarsurf::cli {
 namespace {
 
-bool is_point_file(const fs::path& p) { return is_point_extension(p); }
 
 sim::SensorModel load_sensor(const std::string& spec) {
     if (extension_of(spec) == ".json") return sim::SensorModel::from_json(read_text_file(spec));
@@ -55,7 +54,7 @@ void check_files(const SimulateOptions& o, bool single) {
     if (extension_of(o.sensor) == ".json") files.input(o.sensor);
     if (single) {
         files.output(o.output, "-o");
-        if (o.gt_given || !o.gt.empty()) {
+        if (o.gt_given) {
             if (!o.gt.empty() && !is_point_extension(o.gt))
                 throw InvalidArgument("--gt '" + o.gt + "': unknown point-file extension (lidarsurf writes .bin, .ply, .pcd, .xyz, .txt, .csv)");
             files.output(o.gt, "--gt");
@@ -67,7 +66,7 @@ void check_files(const SimulateOptions& o, bool single) {
 }
 
 int simulate_demo(const SimulateOptions& o) {
-    if (!is_point_file(o.output)) throw InvalidArgument("the demo scene writes one scan: give -o a point file (.bin, .ply, ...)");
+    if (!is_point_extension(o.output)) throw InvalidArgument("the demo scene writes one scan: give -o a point file (.bin, .ply, ...)");
     check_files(o, true);
     const auto world = sim::AnalyticScene::demo();
     const sim::SensorModel sensor = load_sensor(o.sensor);
@@ -122,7 +121,7 @@ int run_simulate(const SimulateOptions& o) {
     cfg.sensor = load_sensor(o.sensor);
     cfg.gt_beams = o.gt_beams;
     cfg.seed = o.seed;
-    const bool single = is_point_file(o.output);
+    const bool single = is_point_extension(o.output);
     if (single) cfg.frames = 1;
     if (!single && !o.gt.empty()) throw InvalidArgument("--gt goes with a point-file output; a directory gets gt/ itself");
     if (single && o.gt.empty()) cfg.gt_beams = 0;

@@ -16,11 +16,16 @@
 
 namespace lidarsurf {
 
+namespace {
+// The lattice point nearest to `world`: the grid's local origin, so that the world lattice is kept.
+Eigen::Vector3d lattice_point_near(const Eigen::Vector3d& world, double alpha) { return (world / alpha).array().round().matrix() * alpha; }
+}  // namespace
+
 VoxelGrid::VoxelGrid(double alpha, const std::optional<Eigen::Vector3d>& origin) : alpha_(alpha) {
     if (!std::isfinite(alpha) || alpha <= 0) throw InvalidArgument("voxel size must be finite and > 0");
     if (origin) {
         if (!origin->allFinite()) throw InvalidArgument("grid origin must be finite");
-        origin_ = (*origin / alpha_).array().round().matrix() * alpha_;
+        origin_ = lattice_point_near(*origin, alpha_);
         origin_set_ = true;
     }
 }
@@ -48,8 +53,7 @@ VoxelKey VoxelGrid::key_of_local(const Eigen::Vector3d& local) const {
 
 void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
     if (origin_set_) return;
-    // Local origin: the lattice point nearest to the first point, so the world lattice is kept.
-    origin_ = (world / alpha_).array().round().matrix() * alpha_;
+    origin_ = lattice_point_near(world, alpha_);  // the first point's
     origin_set_ = true;
 }
 
@@ -240,21 +244,16 @@ std::size_t VoxelGrid::memory_bytes() const {
 
 std::pair<std::size_t, std::size_t> VoxelGrid::count_new(std::span<const Eigen::Vector3d> points) const {
     std::unordered_set<std::uint64_t> voxels, blocks;
-    const Eigen::Vector3d origin = origin_set_ ? origin_ : Eigen::Vector3d::Zero();
-    bool first = !origin_set_;
-    Eigen::Vector3d start = Eigen::Vector3d::Zero();
+    std::optional<Eigen::Vector3d> base;  // the grid's origin, or the one the insert would set
+    if (origin_set_) base = origin_;
     for (const Eigen::Vector3d& p : points) {
         if (!p.allFinite()) continue;
-        if (first) {  // the origin the insert would set
-            start = (p / alpha_).array().round().matrix() * alpha_;
-            first = false;
-        }
-        const Eigen::Vector3d local = p - (origin_set_ ? origin : start);
+        if (!base) base = lattice_point_near(p, alpha_);
         VoxelKey key;
-        for (int i = 0; i < 3; ++i) {
-            const double f = std::floor(local[i] / alpha_);
-            if (!(std::fabs(f) <= kMaxLatticeIndex)) return {0, 0};  // the insert refuses it before any change
-            key[i] = static_cast<std::int32_t>(f);
+        try {
+            key = key_of_local(p - *base);
+        } catch (const InvalidInput&) {
+            return {0, 0};  // the insert refuses the batch before any change
         }
         if (find(key)) continue;
         const auto pack = [](const VoxelKey& k) {
