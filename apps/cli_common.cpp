@@ -80,6 +80,13 @@ std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig
     guard(field_option(app, "--seeded-surface", "--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"));
     guard(field_option(app, "--seed-dilation", "", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"));
     guard(field_option(app, "--min-component-triangles", "--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"));
+    guard(field_option(app, "--carve", "", c.carve,
+                       "Sequences: remove voxels that later rays went through (moving objects; 0 = keep every point)"));
+    guard(field_option(app, "--carve-margin-voxels", "", c.carve_margin_voxels,
+                       "Carving: a ray counts only if it returned this far behind the voxel's surface (voxels)"));
+    guard(field_option(app, "--carve-min-scans", "", c.carve_min_scans,
+                       "Carving: scans that must see through a voxel (and more than hit it) before it is removed"));
+    guard(field_option(app, "--carve-range", "", c.carve_range, "Carving: test the voxels within this distance of each scan's sensor (metres)"));
     return guards;
 }
 

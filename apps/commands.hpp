@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
+#include "lidarsurf/eval/map_metrics.hpp"
 
 namespace lidarsurf::cli {
 
@@ -53,13 +54,23 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o);
 int run_bench(const BenchOptions& o);
 
 struct FuseOptions {
-    std::string dir, output, mesh_format = "auto", calib;
+    std::string dir, output, mesh_format = "auto", calib, poses, json;
     int first = 0, frames = 0, step = 1, remesh_every = 0;
     bool quiet = false;  // no progress report
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
 };
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);
 int run_fuse(const FuseOptions& o);
+
+struct MapBenchmarkOptions {
+    std::string dir, out, vdbfusion;
+    std::string rows = "default,no-carving,paper";
+    int frames = 0, gt_stride = 5, threads = 0;
+    bool quiet = false;
+    MapEvaluationConfig eval;
+};
+CLI::App* add_map_benchmark_command(CLI::App& app, MapBenchmarkOptions& o);
+int run_map_benchmark(const MapBenchmarkOptions& o);
 
 struct ViewOptions {
     std::string input, output, points, colour = "height", title;

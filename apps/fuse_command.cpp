@@ -7,9 +7,15 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
 #include "commands.hpp"
 #include "file_roles.hpp"
 #include "progress.hpp"
+#include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 
@@ -19,41 +25,64 @@ namespace lidarsurf::cli {
 
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     CLI::App* f = app.add_subcommand("fuse", "Fuse a sequence of scans with poses (KITTI odometry layout) into one mesh");
-    f->add_option("dir", o.dir, "Sequence directory: velodyne/000000.bin, ... and poses.txt (one sensor-to-world 3x4 pose a line)")
+    f->add_option("dir", o.dir,
+                  "Sequence directory: velodyne/000000.bin, ... with poses.txt (sensor-to-world lidar poses, as simulate "
+                  "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt)")
         ->required();
     f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();
     f->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj")->capture_default_str();
+    f->add_option("--poses", o.poses,
+                  "Pose file (KITTI format, one 3x4 sensor-to-world pose a line), e.g. from your odometry; the lidar's "
+                  "unless --calib is given");
     f->add_option("--first", o.first, "First frame")->capture_default_str();
     f->add_option("--frames", o.frames, "Frames to fuse (0 = to the last)")->capture_default_str();
     f->add_option("--step", o.step, "Use every step-th frame")->capture_default_str();
     f->add_option("--calib", o.calib,
                   "KITTI calib.txt: the poses are the left camera's (KITTI's published ones); its Tr: line converts them "
-                  "to the lidar's");
+                  "to the lidar's (found in the sequence directory when the poses come from dataset/poses/)");
     f->add_option("--remesh-every", o.remesh_every,
                   "Also extract the mesh after every this many fused frames, printing its time (0 = only at the end)")
         ->capture_default_str();
+    f->add_option("--json", o.json, "Also write a report: times by stage, and per frame the time, voxels and resident memory");
     f->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     add_reconstruct_options(f, o.reconstruct);
     f->footer("--origin is the sensor's position in the scan frame (0,0,0 for KITTI's velodyne frame).\n"
-              "Poses map the scan frame to the world; KITTI's published poses are the left camera's: give\n"
-              "the sequence's calib.txt with --calib and the world is frame 0's velodyne frame.\n\n"
-              "Example:\n  lidarsurf simulate --frames 20 -o town && lidarsurf fuse town -o town.ply --remesh-every 1");
+              "Poses map the scan frame to the world; with KITTI's published (camera) poses the world is\n"
+              "frame 0's velodyne frame. Moving objects are carved away (--carve 0 keeps them).\n\n"
+              "Examples:\n  lidarsurf simulate --frames 20 -o town && lidarsurf fuse town -o town.ply --remesh-every 1\n"
+              "  lidarsurf fuse dataset/sequences/00 -o kitti00.ply --frames 200\n"
+              "  lidarsurf fuse drive --poses drive_poses.txt -o drive.ply");
     return f;
 }
+
+namespace {
+double resident_mib() {
+    long pages = 0, resident = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+        if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+        std::fclose(f);
+    }
+    return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
+}
+double peak_resident_mib() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+}  // namespace
 
 int run_fuse(const FuseOptions& o) {
     if (o.first < 0 || o.frames < 0 || o.step < 1 || o.remesh_every < 0)
         throw InvalidArgument("--first and --frames must be >= 0, --step >= 1, --remesh-every >= 0");
     const Method m = resolve_method(o.reconstruct);
-    if (m.imls) throw InvalidArgument("fuse: the method must be paper (IMLS meshes one scan)");
+    if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
     const MeshFormat requested = parse_mesh_format(o.mesh_format);
     const KittiSequence seq{o.dir};
     const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
-    if (!fs::exists(seq.poses())) throw IoError(seq.poses().string() + ": no poses file (one sensor-to-world pose per scan)");
-    std::vector<Eigen::Isometry3d> poses = read_poses(seq.poses());
-    if (!o.calib.empty()) poses = lidar_poses(poses, read_calib_tr(o.calib));
+    const SequencePoses where = find_sequence_poses(seq.dir, o.poses, o.calib);
+    const std::vector<Eigen::Isometry3d> poses = read_sequence_poses(where);
     if (poses.size() < available)
-        throw InvalidInput(seq.poses().string() + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(available) + " scans");
+        throw InvalidInput(where.poses.string() + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(available) + " scans");
     const auto first = static_cast<std::size_t>(o.first);
     if (first >= available)
         throw InvalidArgument("--first " + std::to_string(first) + ": the sequence has " + std::to_string(available) + " scans");
@@ -63,8 +92,10 @@ int run_fuse(const FuseOptions& o) {
         frames.push_back(i);
     FileRoles files;
     files.input_sequence(seq.dir);
-    if (!o.calib.empty()) files.input(o.calib);
+    files.input(where.poses);
+    if (!where.calib.empty()) files.input(where.calib);
     files.output(o.output, "-o");
+    if (!o.json.empty()) files.output(o.json, "--json");
     files.check();
     const MeshFormat format = mesh_format_for(o.output, requested);  // .stl: exit 2 now
     std::FILE* const report = report_stream(o.output);
@@ -73,6 +104,7 @@ int run_fuse(const FuseOptions& o) {
     Mesh mesh;
     double read_ms = 0;
     bool fresh = false;  // whether `mesh` holds every frame fused so far
+    nlohmann::json per_frame = nlohmann::json::array();
     Progress progress("fuse", "frames", frames.size(), o.quiet);
     for (std::size_t n = 0; n < frames.size(); ++n) {
         const std::size_t i = frames[n];
@@ -81,26 +113,59 @@ int run_fuse(const FuseOptions& o) {
         const Eigen::Isometry3d& pose = poses[i];
         for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN: integrate drops it
         read_ms += ms_since(t0);
+        const double before = rec.summary().seconds_insert + rec.summary().seconds_carve;
         rec.integrate(cloud.points, pose * m.sensor);
+        nlohmann::json row = {{"frame", i},
+                              {"integrate_ms", 1e3 * (rec.summary().seconds_insert + rec.summary().seconds_carve - before)},
+                              {"voxels", rec.summary().voxels}};
         fresh = false;
         progress.update(n + 1, std::to_string(rec.summary().voxels) + " voxels");
         if (o.remesh_every > 0 && ((n + 1) % static_cast<std::size_t>(o.remesh_every) == 0 || n + 1 == frames.size())) {
             mesh = rec.extract_mesh();
             fresh = true;
             const ReconstructionSummary& s = rec.summary();
+            row["remesh_ms"] = 1e3 * (s.seconds_tsdf + s.seconds_mesh);
             std::fprintf(report, "frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
                         KittiSequence::frame_name(i).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles,
                         1e3 * s.seconds_tsdf, 1e3 * s.seconds_mesh);
             std::fflush(report);
         }
+        row["resident_mib"] = resident_mib();
+        per_frame.push_back(std::move(row));
     }
     progress.finish(std::to_string(rec.summary().voxels) + " voxels");
     if (!fresh) mesh = rec.extract_mesh();
     if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
     const auto t0 = std::chrono::steady_clock::now();
     write_mesh(mesh, o.output, format);
-    std::fprintf(report, "%s: %zu frames fused (%s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
-                method_name(m).c_str(), rec.summary().to_string().c_str(), read_ms, ms_since(t0), o.output.c_str());
+    const double write_ms = ms_since(t0);
+    const ReconstructionSummary& s = rec.summary();
+    std::fprintf(report, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
+                method_name(m).c_str(), where.layout.c_str(), s.to_string().c_str(), read_ms, write_ms, o.output.c_str());
+    if (!o.json.empty()) {
+        const nlohmann::json j = {{"sequence", o.dir},
+                                  {"poses", where.poses.string()},
+                                  {"method", method_name(m)},
+                                  {"carve", m.config.carve},
+                                  {"frames", frames.size()},
+                                  {"points", s.points_read},
+                                  {"voxels", s.voxels},
+                                  {"carved_voxels", s.carved_voxels},
+                                  {"mesh_vertices", mesh.vertices.size()},
+                                  {"mesh_triangles", mesh.triangles.size()},
+                                  {"seconds",
+                                   {{"read", read_ms / 1e3},
+                                    {"insert", s.seconds_insert},
+                                    {"carve", s.seconds_carve},
+                                    {"last_tsdf", s.seconds_tsdf},
+                                    {"last_mesh", s.seconds_mesh},
+                                    {"write", write_ms / 1e3}}},
+                                  {"peak_resident_mib", peak_resident_mib()},
+                                  {"per_frame", per_frame}};
+        AtomicFile out(o.json);
+        out.stream() << j.dump(1) << "\n";
+        out.commit();
+    }
     return 0;
 }
 

@@ -223,6 +223,8 @@ int main(int argc, char** argv) {
     auto* fu = add_fuse_command(app, fo);
     ViewOptions vo;
     auto* vw = add_view_command(app, vo);
+    MapBenchmarkOptions mo;
+    auto* mb = add_map_benchmark_command(app, mo);
 
     try {
         app.parse(argc, argv);
@@ -242,6 +244,7 @@ int main(int argc, char** argv) {
         }
         if (*fu) return run_fuse(fo);
         if (*vw) return run_view(vo);
+        if (*mb) return run_map_benchmark(mo);
     } catch (const Error& e) {
         return fail("error", e.what(), exit_code(e));
     } catch (const std::bad_alloc&) {

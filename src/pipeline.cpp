@@ -34,7 +34,12 @@ std::string ReconstructionSummary::to_string() const {
                   points_read, points_dropped, voxels, candidate_vertices, reused_vertices, defined_vertices, mesh_vertices, mesh_triangles,
                   static_cast<double>(memory_estimate) / 1048576.0,
                   1e3 * seconds_insert, 1e3 * seconds_tsdf, 1e3 * seconds_mesh,
-                  1e3 * (seconds_insert + seconds_tsdf + seconds_mesh));
+                  1e3 * (seconds_insert + seconds_carve + seconds_tsdf + seconds_mesh));
+    if (seconds_carve > 0 || carved_voxels > 0) {
+        char carve[128];
+        std::snprintf(carve, sizeof carve, "; carving %.1f ms, %zu voxels carved", 1e3 * seconds_carve, carved_voxels);
+        return buf + std::string(carve);
+    }
     return buf;
 }
 
@@ -66,6 +71,10 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     constexpr std::size_t kChunk = 1 << 18;
     const std::size_t before = grid_.memory_bytes();
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    // Free-space carving: on scans seen from a known position (sequences), after the scan's points.
+    const bool carving = config_.carve && grid_.has_viewpoints() && seen_from;
+    if (carving && !carver_) carver_.emplace(config_.carve_margin_voxels * config_.voxel_size, config_.carve_min_scans, config_.carve_range);
+    std::vector<VoxelGrid::Hit> hits, chunk_hits;
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
         const std::size_t end = std::min(points.size(), begin + kChunk);
         const std::span<const Eigen::Vector3d> chunk = points.subspan(begin, end - begin);
@@ -81,7 +90,11 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
                                                     " m; nothing of this chunk was integrated"));
             }
         }
-        summary_.points_dropped += arena.execute([&] { return grid_.insert(chunk, seen_from); });
+        summary_.points_dropped += arena.execute([&] { return grid_.insert(chunk, seen_from, carving ? &chunk_hits : nullptr); });
+        for (VoxelGrid::Hit h : chunk_hits) {
+            h.point += static_cast<std::uint32_t>(begin);
+            hits.push_back(h);
+        }
         const double used = static_cast<double>(grid_.memory_bytes());
         if (used > budget_bytes()) {
             // Extrapolate this call's growth to all of its points for the message.
@@ -90,8 +103,14 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
                                             format_value(points.size()) + " points at voxel size " + format_value(config_.voxel_size) + " m"));
         }
     }
-    summary_.voxels = grid_.size();
     summary_.seconds_insert += seconds_since(t0);
+    if (carving) {
+        const auto t1 = std::chrono::steady_clock::now();
+        const CarvingStats carved = arena.execute([&] { return carver_->carve(grid_, points, hits, *seen_from); });
+        summary_.carved_voxels += carved.removed;
+        summary_.seconds_carve += seconds_since(t1);
+    }
+    summary_.voxels = grid_.size();
 }
 
 Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
@@ -99,7 +118,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + format_value(summary_.points_read) + " dropped)");
     const auto budget = static_cast<std::size_t>(budget_bytes());
-    summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) +
+    summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) + (carver_ ? carver_->memory_bytes() : 0) +
                                estimate_extraction_bytes(grid_, config_, evaluation, budget);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),

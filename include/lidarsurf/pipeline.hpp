@@ -13,6 +13,7 @@
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/surface/free_space.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
@@ -28,7 +29,8 @@ struct ReconstructionSummary {
     std::size_t mesh_vertices = 0;
     std::size_t mesh_triangles = 0;
     std::size_t memory_estimate = 0;  ///< bytes: the grid plus estimate_extraction_bytes (the budget check)
-    double seconds_insert = 0, seconds_tsdf = 0, seconds_mesh = 0;
+    std::size_t carved_voxels = 0;  ///< voxels removed by free-space carving, over all scans
+    double seconds_insert = 0, seconds_carve = 0, seconds_tsdf = 0, seconds_mesh = 0;
     /// The TSDF stage by phase, for the fast path with seeded_surface (zero otherwise).
     SeededTiming tsdf_phases;
 
@@ -86,6 +88,7 @@ private:
     Eigen::Vector3d sensor_;
     VoxelGrid grid_;
     std::optional<TsdfField> previous_;  // the last fast extraction's field, for the next one
+    std::optional<FreeSpaceCarver> carver_;  // with config.carve, from the first scan with a viewpoint
     ReconstructionSummary summary_;
 };
 

@@ -175,6 +175,15 @@ PYBIND11_MODULE(_lidarsurf, m) {
         .def_readwrite("seeded_surface", &ReconstructionConfig::seeded_surface,
                        "Keep only the surface connected to the data (False: every cube with defined corners).")
         .def_readwrite("seed_dilation", &ReconstructionConfig::seed_dilation, "Seed cubes within this many cubes of an occupied voxel.")
+        .def_readwrite("carve", &ReconstructionConfig::carve,
+                       "Sequences (integrate with a viewpoint): remove voxels that later rays went through, the trails of "
+                       "moving objects (False: keep every point; a single scan is never carved).")
+        .def_readwrite("carve_margin_voxels", &ReconstructionConfig::carve_margin_voxels,
+                       "Carving: a ray counts only if it returned this many voxels behind the voxel's surface.")
+        .def_readwrite("carve_min_scans", &ReconstructionConfig::carve_min_scans,
+                       "Carving: scans that must see through a voxel (and more than hit it) before it is removed.")
+        .def_readwrite("carve_range", &ReconstructionConfig::carve_range,
+                       "Carving: the voxels within this distance (metres) of each scan's sensor are tested against it.")
         .def_readwrite("threads", &ReconstructionConfig::threads, "Worker threads; 0 = all cores.")
         .def_readwrite("max_memory_mb", &ReconstructionConfig::max_memory_mb,
                        "Memory budget in MiB; a reconstruction estimated to need more raises MemoryError.")
@@ -188,7 +197,9 @@ PYBIND11_MODULE(_lidarsurf, m) {
               << ", truncation_voxels=" << c.truncation_voxels
               << ", snap_to_plane=" << (c.snap_to_plane ? "True" : "False") << ", min_component_triangles=" << c.min_component_triangles
               << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")
-              << ", seed_dilation=" << c.seed_dilation << ", threads=" << c.threads << ")";
+              << ", seed_dilation=" << c.seed_dilation << ", carve=" << (c.carve ? "True" : "False")
+              << ", carve_margin_voxels=" << c.carve_margin_voxels << ", carve_min_scans=" << c.carve_min_scans << ", carve_range=" << c.carve_range
+              << ", threads=" << c.threads << ")";
             return o.str();
         });
 

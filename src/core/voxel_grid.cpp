@@ -65,13 +65,42 @@ void VoxelGrid::cache_block(const VoxelKey& block_key) {
     }
     // Every point goes through here or through the cached block, which was marked when it was
     // cached (clear_touched() drops the cache).
+    touch(b);
+    last_block_ = &index_.block_at(b);
+    last_occupancy_ = &occupancy_[b];
+    last_block_key_ = block_key;
+}
+
+void VoxelGrid::touch(std::uint32_t b) {
     if (!touched_flag_[b]) {
         touched_flag_[b] = 1;
         touched_.push_back(b);
     }
-    last_block_ = &index_.block_at(b);
-    last_occupancy_ = &occupancy_[b];
-    last_block_key_ = block_key;
+}
+
+std::size_t VoxelGrid::remove(std::size_t voxel) {
+    using Map = BlockMap<std::int32_t>;
+    const auto slot_of = [&](const VoxelKey& key) -> std::pair<std::int32_t*, std::uint32_t> {
+        const auto b = static_cast<std::uint32_t>(index_.index_of(Map::block_of(key)));
+        return {&index_.block_at(b)[static_cast<std::size_t>(Map::offset_of(key))], b};
+    };
+    const VoxelKey key = keys_.at(voxel);
+    const auto [slot, block] = slot_of(key);
+    const int offset = Map::offset_of(key);
+    *slot = -1;
+    occupancy_[block][static_cast<std::size_t>(offset >> 6)] &= ~(std::uint64_t{1} << (offset & 63));
+    touch(block);
+    const std::size_t last = keys_.size() - 1;
+    if (voxel != last) {
+        *slot_of(keys_[last]).first = static_cast<std::int32_t>(voxel);
+        keys_[voxel] = keys_[last];
+        stats_[voxel] = stats_[last];
+        if (viewpoints_enabled_) viewpoint_sums_[voxel] = viewpoint_sums_[last];
+    }
+    keys_.pop_back();
+    stats_.pop_back();
+    if (viewpoints_enabled_) viewpoint_sums_.pop_back();
+    return last;
 }
 
 std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
@@ -98,13 +127,17 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     ++points_;
 }
 
-std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint) {
+std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint,
+                              std::vector<Hit>* hits) {
     if (viewpoints_enabled_ && !viewpoint) throw InvalidArgument("this grid has viewpoints: insert points with the position they were seen from");
     if (viewpoint && !viewpoint->allFinite()) throw InvalidArgument("viewpoint must be finite");
     const std::size_t n = points.size();
     std::size_t first = 0;
     while (first < n && !points[first].allFinite()) ++first;
-    if (first == n) return n;
+    if (first == n) {
+        if (hits) hits->clear();
+        return n;
+    }
     set_origin_from(points[first]);
     // 1. The voxel key of every point, in parallel; a point out of range throws before any change.
     constexpr std::uint32_t kSkip = 0xffffffffu;
@@ -204,6 +237,12 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
         const Eigen::Vector3d local = *viewpoint - origin_;
         for (std::size_t run = 0; run + 1 < runs.size(); ++run)
             viewpoint_sums_[voxel[order[runs[run]]]] += static_cast<double>(runs[run + 1] - runs[run]) * local;
+    }
+    if (hits) {
+        hits->clear();
+        hits->reserve(runs.size() - 1);
+        for (std::size_t run = 0; run + 1 < runs.size(); ++run)
+            hits->push_back({voxel[order[runs[run]]], order[runs[run]]});
     }
     points_ += n - dropped;
     return dropped;

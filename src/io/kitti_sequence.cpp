@@ -32,6 +32,33 @@ std::size_t KittiSequence::frame_count() const {
     return n;
 }
 
+SequencePoses find_sequence_poses(const std::filesystem::path& dir, const std::filesystem::path& poses_flag,
+                                  const std::filesystem::path& calib_flag) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!poses_flag.empty()) return {poses_flag, calib_flag, "--poses"};
+    if (fs::exists(dir / "poses.txt", ec)) return {dir / "poses.txt", calib_flag, "poses.txt"};
+    // KITTI odometry: dataset/sequences/NN and dataset/poses/NN.txt.
+    const fs::path seq = fs::weakly_canonical(dir, ec);
+    const std::string name = seq.filename().string();
+    const fs::path kitti = seq.parent_path().parent_path() / "poses" / (name + ".txt");
+    if (!name.empty() && seq.parent_path().filename() == "sequences" && fs::exists(kitti, ec)) {
+        fs::path calib = calib_flag.empty() ? dir / "calib.txt" : calib_flag;
+        if (!fs::exists(calib, ec))
+            throw IoError(kitti.string() + ": KITTI's poses are the left camera's and " + calib.string() +
+                          " is missing (give the sequence's calib.txt with --calib)");
+        return {kitti, calib, "KITTI odometry"};
+    }
+    throw IoError(dir.string() + ": no poses (looked for " + (dir / "poses.txt").string() + " and " + kitti.string() +
+                  "; give a sensor-to-world pose file with --poses)");
+}
+
+std::vector<Eigen::Isometry3d> read_sequence_poses(const SequencePoses& where) {
+    std::vector<Eigen::Isometry3d> poses = read_poses(where.poses);
+    if (!where.calib.empty()) poses = lidar_poses(poses, read_calib_tr(where.calib));
+    return poses;
+}
+
 std::vector<Eigen::Isometry3d> read_poses(const std::filesystem::path& path) {
     return parse_poses(detail::read_file(path.string()), path.string());
 }

@@ -45,6 +45,7 @@ void ReconstructionConfig::make_paper_literal() {
     seeded_surface = false;
     snap_to_plane = false;
     min_component_triangles = 0;
+    carve = false;
 }
 
 int ReconstructionConfig::max_level() const { return adaptive() ? k_max : k; }
@@ -80,6 +81,11 @@ void ReconstructionConfig::validate() const {
         fail("seed dilation must be in [0, " + format_value(kMaxNeighbourhoodLevel) + "] (got " + format_value(seed_dilation) + ")");
     if (!std::isfinite(max_memory_mb) || max_memory_mb < 1 || max_memory_mb > 1e9)
         fail("max memory must be within [1, 1e9] MiB (got " + format_value(max_memory_mb) + ")");
+    if (!std::isfinite(carve_margin_voxels) || carve_margin_voxels < 0.5 || carve_margin_voxels > 1e3)
+        fail("carve margin must be within [0.5, 1e3] voxels (got " + format_value(carve_margin_voxels) + ")");
+    if (!std::isfinite(carve_range) || carve_range <= 0 || carve_range > 1e4)
+        fail("carve range must be within (0, 1e4] m (got " + format_value(carve_range) + ")");
+    if (carve_min_scans < 1 || carve_min_scans > 65535) fail("carve min scans must be in [1, 65535] (got " + format_value(carve_min_scans) + ")");
     if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + format_value(threads) + ")");
 }
 

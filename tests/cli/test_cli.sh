@@ -75,8 +75,19 @@ expect 4 "velodyne|cannot|no such" -- "$cli" fuse "$dir/nothere" -o "$dir/x.ply"
 mkdir -p "$dir/short/velodyne" && cp "$seq"/velodyne/*.bin "$dir/short/velodyne/" && head -1 "$seq/poses.txt" > "$dir/short/poses.txt"
 expect 3 "1 poses for 2 scans" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
 rm "$dir/short/poses.txt"
-expect 4 "no poses file" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
+expect 4 "no poses \\(looked for" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
 [ ! -e "$dir/x.ply" ] || { echo "FAIL: a failed fuse left a mesh"; fail=$((fail + 1)); }
+# The KITTI odometry layout as downloaded: dataset/sequences/07 with calib.txt, dataset/poses/07.txt
+# (the camera's); --poses for a pose file from elsewhere (the lidar's). Identity Tr: the same mesh.
+mkdir -p "$dir/dataset/sequences/07/velodyne" "$dir/dataset/poses"
+cp "$seq"/velodyne/*.bin "$dir/dataset/sequences/07/velodyne/" && cp "$seq/poses.txt" "$dir/dataset/poses/07.txt"
+expect 4 "calib.txt is missing" -- "$cli" fuse "$dir/dataset/sequences/07" -o "$dir/x.ply"
+cp "$dir/calib.txt" "$dir/dataset/sequences/07/calib.txt"
+expect 0 "poses from KITTI odometry" -- "$cli" fuse "$dir/dataset/sequences/07" -o "$dir/fused_kitti.ply"
+check "the KITTI layout gives the sequence's mesh" -- cmp -s "$dir/fused_kitti.ply" "$dir/fused_plain.ply"
+expect 0 "poses from --poses" -- "$cli" fuse "$dir/short" -o "$dir/fused_flag.ply" --poses "$seq/poses.txt" --json "$dir/fuse.json"
+check "fuse --poses gives the sequence's mesh" -- cmp -s "$dir/fused_flag.ply" "$dir/fused_plain.ply"
+check "fuse --json reports each frame" -- grep -q '"integrate_ms"' "$dir/fuse.json"
 # Three rows keep this quick under the sanitizers (every row is listed by Benchmark.TableOneRows).
 expect 0 "against the true scene triangles" -- "$cli" benchmark "$seq" --frames 1 --no-plots --methods 'default,AN+GC kmax=5,IMLS'
 [ "$(wc -l < "$seq/benchmark/results.csv")" -eq 4 ] || { echo "FAIL: results.csv should have a header and 3 rows"; fail=$((fail + 1)); }

@@ -299,3 +299,62 @@ TEST(VoxelGrid, MeanViewpointIsThePointWeightedMeanOfTheSensorPositions) {
     }
     EXPECT_FALSE(grid.mean_viewpoint(VoxelKey(500, 500, 500), VoxelKey(510, 510, 510)).has_value());
 }
+
+// remove() against a grid built from the remaining voxels' points only; insert()'s hits against
+// the batch grouped directly.
+TEST(VoxelGrid, RemoveLeavesTheGridOfTheOtherVoxelsAndHitsNameEachVoxelsFirstPoint) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.5, 1.5);
+    std::vector<Eigen::Vector3d> pts;
+    for (int i = 0; i < 3000; ++i) pts.push_back({u(rng), u(rng), 0.3 * u(rng)});
+    VoxelGrid grid(0.2, Eigen::Vector3d::Zero());
+    grid.enable_viewpoints(Eigen::Vector3d::Zero());
+    std::vector<VoxelGrid::Hit> hits;
+    grid.insert(pts, Eigen::Vector3d(1, 2, 3), &hits);
+    const auto groups = group(pts, 0.2, grid.origin());
+    ASSERT_EQ(hits.size(), groups.size());
+    for (const VoxelGrid::Hit& h : hits) {
+        const VoxelKey key = grid.keys()[h.voxel];
+        const Eigen::Vector3d l = pts[h.point] - grid.origin();
+        EXPECT_EQ(grid.key_of_local(l), key);
+        for (std::uint32_t j = 0; j < h.point; ++j) EXPECT_NE(grid.key_of_local(pts[j] - grid.origin()), key) << "not the first point";
+    }
+    // Remove every third voxel (by key), then compare with the remaining points inserted afresh.
+    std::set<KeyTuple> removed;
+    int n = 0;
+    for (const auto& [k, members] : groups)
+        if (n++ % 3 == 0) removed.insert(k);
+    grid.clear_touched();
+    for (const KeyTuple& k : removed) {
+        const VoxelStats* s = grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)});
+        ASSERT_NE(s, nullptr);
+        grid.remove(static_cast<std::size_t>(s - grid.stats().data()));
+    }
+    EXPECT_FALSE(grid.touched_blocks().empty());
+    std::vector<Eigen::Vector3d> rest;
+    for (const Eigen::Vector3d& p : pts) {
+        const Eigen::Vector3d l = p - grid.origin();
+        if (!removed.count({int(std::floor(l.x() / 0.2)), int(std::floor(l.y() / 0.2)), int(std::floor(l.z() / 0.2))})) rest.push_back(p);
+    }
+    VoxelGrid oracle(0.2, Eigen::Vector3d::Zero());
+    oracle.enable_viewpoints(Eigen::Vector3d::Zero());
+    oracle.insert(rest, Eigen::Vector3d(1, 2, 3));
+    ASSERT_EQ(grid.size(), oracle.size());
+    std::size_t boxed = 0;
+    grid.for_each_in_box(VoxelKey::Constant(-100), VoxelKey::Constant(100), [&](const VoxelKey& key, const VoxelStats& s) {
+        ++boxed;
+        const VoxelStats* o = oracle.find(key);
+        ASSERT_NE(o, nullptr);
+        EXPECT_EQ(s.count, o->count);
+        EXPECT_LT((s.mean - o->mean).norm(), 1e-12);
+    });
+    EXPECT_EQ(boxed, grid.size());
+    EXPECT_LT((*grid.mean_viewpoint(VoxelKey::Constant(-100), VoxelKey::Constant(100)) - Eigen::Vector3d(1, 2, 3)).norm(), 1e-9);
+    for (const KeyTuple& k : removed) EXPECT_EQ(grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)}), nullptr);
+    // A point in a removed voxel starts it afresh.
+    const KeyTuple k = *removed.begin();
+    const Eigen::Vector3d p = grid.origin() + 0.2 * Eigen::Vector3d(std::get<0>(k) + 0.5, std::get<1>(k) + 0.5, std::get<2>(k) + 0.5);
+    grid.insert(std::vector<Eigen::Vector3d>{p}, Eigen::Vector3d(1, 2, 3));
+    ASSERT_NE(grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)}), nullptr);
+    EXPECT_EQ(grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)})->count, 1u);
+}

@@ -53,7 +53,20 @@ public:
     /// outside the index range. Returns the number of non-finite points skipped.
     /// `viewpoint` (world) is where the points were seen from: required once viewpoints are
     /// enabled (InvalidArgument otherwise), ignored before.
-    std::size_t insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint = std::nullopt);
+    /// `hits`, when given, gets one entry per voxel the batch reached: the voxel's index into
+    /// stats() and the index in `points` of its first point in the batch, by voxel index.
+    struct Hit {
+        std::uint32_t voxel = 0;
+        std::uint32_t point = 0;
+    };
+    std::size_t insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint = std::nullopt,
+                       std::vector<Hit>* hits = nullptr);
+
+    /// Empties voxel `voxel` (an index into stats()): its statistics and viewpoint are dropped, its
+    /// block counts as touched, and the last voxel takes its index (keys() and stats() stay dense).
+    /// Returns the index the moved voxel had (== `voxel` when it was the last). A later point in
+    /// that voxel starts it afresh.
+    std::size_t remove(std::size_t voxel);
 
     /// Viewpoints (sequences seen from several sensor positions): from now on each voxel also
     /// sums the sensor position of each of its points. The points already inserted are taken as
@@ -133,6 +146,7 @@ private:
     std::int32_t voxel_index_slow(const VoxelKey& key);
     // Makes block `block_key` (created if absent, marked touched) the cached last block.
     void cache_block(const VoxelKey& block_key);
+    void touch(std::uint32_t block);
 
     double alpha_;
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();

@@ -33,6 +33,24 @@ struct KittiSequence {
     std::size_t frame_count() const;
 };
 
+/// Where a sequence's poses are, in the layouts users have:
+///  - `poses_flag` when given (sensor-to-world lidar poses, e.g. from an odometry such as kiss-icp;
+///    camera poses when `calib_flag` is given too);
+///  - else DIR/poses.txt (lidar poses, as `lidarsurf simulate` writes);
+///  - else the KITTI odometry layout: DIR = dataset/sequences/NN, poses in dataset/poses/NN.txt
+///    (the left camera's), converted with `calib_flag` or DIR/calib.txt.
+/// Throws IoError naming the places looked at when none holds poses, and when KITTI's camera
+/// poses have no calibration to convert them.
+struct SequencePoses {
+    std::filesystem::path poses;
+    std::filesystem::path calib;  ///< empty: the poses are the lidar's
+    std::string layout;           ///< "poses.txt", "KITTI odometry" or "--poses", for reports
+};
+SequencePoses find_sequence_poses(const std::filesystem::path& dir, const std::filesystem::path& poses_flag,
+                                  const std::filesystem::path& calib_flag);
+/// The lidar poses of find_sequence_poses(...): read, and converted with the calibration if any.
+std::vector<Eigen::Isometry3d> read_sequence_poses(const SequencePoses& where);
+
 /// Reads a KITTI poses file. Throws IoError if unreadable and FormatError (with the line number)
 /// for a line that is not 12 finite numbers or whose rotation is not orthonormal (1e-3) or is a
 /// reflection (determinant -1).

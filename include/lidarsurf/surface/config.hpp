@@ -72,13 +72,23 @@ struct ReconstructionConfig {
     bool seeded_surface = true;
     /// Seeds of that search: the cubes within this many cubes of an occupied voxel.
     int seed_dilation = 0;
+    /// Free-space carving of fused sequences (docs/method.md, "Free space"): a voxel whose surface
+    /// rays of later scans went through, returning carving_margin_voxels behind it, in at least
+    /// carve_min_scans scans and in more scans than hit it, is removed (what moved: ghosts).
+    /// Acts only on scans integrated with a viewpoint (Reconstructor::integrate(points,
+    /// viewpoint)); a single scan is never carved.
+    bool carve = true;
+    double carve_margin_voxels = 2.0;  ///< how far behind a voxel's surface a return must be
+    int carve_min_scans = 2;           ///< passes needed before a voxel can be carved
+    double carve_range = 40.0;         ///< metres: voxels farther from a scan's viewpoint are not tested against it
     int threads = 0;           ///< Worker threads; 0 = all cores.
     /// Memory budget in MiB: the reconstruction refuses (ResourceLimit, with its estimate) a cloud
     /// whose voxel grid and TSDF would need more (docs/reliability.md, "Memory budget").
     double max_memory_mb = 4096;
 
     /// The paper's method as written, in `mode`: every guard above off (no planarity or thickness
-    /// guard, no slab fallback, no truncation, every cube with defined corners meshed, interpolated vertices).
+    /// guard, no slab fallback, no truncation, every cube with defined corners meshed, interpolated
+    /// vertices, no carving).
     static ReconstructionConfig paper(Mode mode = Mode::AdaptiveGaussian);
     /// Turns this configuration's guards off as paper() does, keeping its other fields.
     void make_paper_literal();

@@ -1,0 +1,95 @@
+#pragma once
+// Free-space carving for fused sequences (docs/method.md, "Free space"). The paper meshes one
+// scan; a drive fused into one grid also holds every moving object at every place it was seen,
+// and those voxels' statistics make surfaces (ghosts) where the street is empty. A ray says more
+// than where its return is: the space between the sensor and the return was empty at that time.
+//
+// Each voxel keeps evidence counted in scans: the scans that put a point in it (hits) and the
+// scans that saw through it without hitting it (passes). A voxel with at least `min_scans` passes
+// and more passes than hits is removed from the grid (VoxelGrid::remove): its block counts as
+// touched, so an incremental extraction redoes the vertices it reached, as for a new point.
+//
+// "Saw through": the scan is a range image from its viewpoint (the nearest return per 0.2 x 0.4
+// degree pixel). Each occupied voxel within `range`, not hit by the scan, is tested against the
+// returns of its pixel and of the pixels above and below; the voxel's points are a Gaussian
+// (mean, covariance + sigma0^2 I, sigma0 = alpha / 8, alpha / 4 for fewer than kMinPoints):
+//  - planar voxel: the return's ray crosses the voxel's plane inside the points' in-plane ellipse
+//    (two sigmas) and the return lies at least `margin` behind that plane. A grazing ray over the
+//    ground returns on the same plane and never counts;
+//  - other voxels (a line of one ring, a corner, foliage, a few points): the ray passes within two
+//    sigmas of the mean (Mahalanobis) and returns at least `margin` beyond it, and the voxel lies
+//    at least `margin` off the surface the ray returned on (the plane of the return's voxel, or
+//    the horizontal plane through the return when that voxel has none): a far ring on the ground
+//    is on the ground plane of the return beyond it, a car's trail is not.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lidarsurf/core/voxel_grid.hpp"
+
+namespace lidarsurf {
+
+struct CarvingStats {
+    std::size_t rays = 0;       ///< pixels of the range image
+    std::size_t crossings = 0;  ///< voxel-return pairs tested (the return far enough behind the voxel)
+    std::size_t passes = 0;     ///< voxels given a pass this scan
+    std::size_t removed = 0;    ///< voxels removed this scan
+};
+
+class FreeSpaceCarver {
+public:
+    static constexpr int kMinPoints = 5;
+
+    /// `margin` in metres (> 0); `min_scans` >= 1; voxels farther than `range` (metres, > 0)
+    /// from a scan's viewpoint are not tested against it.
+    FreeSpaceCarver(double margin, int min_scans, double range);
+
+    /// After `grid.insert(points, viewpoint, &hits)` of one scan: counts the hits, tests the
+    /// voxels within range against the scan's returns seen from `viewpoint` (world), counts the
+    /// passes and removes the voxels carved. `points` are the scan's points in world coordinates.
+    CarvingStats carve(VoxelGrid& grid, std::span<const Eigen::Vector3d> points, std::span<const VoxelGrid::Hit> hits,
+                       const Eigen::Vector3d& viewpoint);
+
+    /// Scans counted so far.
+    std::uint32_t scans() const { return scan_; }
+    std::size_t memory_bytes() const {
+        return evidence_.capacity() * sizeof(Evidence) + (pixel_of_.capacity() + nearest_.capacity()) * sizeof(std::uint32_t) +
+               (depth_.capacity() + elevation_.capacity()) * sizeof(float);
+    }
+
+    /// The evidence of voxel `voxel` (an index into the grid's stats()).
+    std::uint16_t hit_scans(std::size_t voxel) const { return evidence_.at(voxel).hits; }
+    std::uint16_t pass_scans(std::size_t voxel) const { return evidence_.at(voxel).passes; }
+    /// 0: no surface (too few points), 1: planar, 2: thick, 3: a line (one ring).
+    int shape(std::size_t voxel) const { return static_cast<int>(evidence_.at(voxel).shape); }
+
+private:
+    enum class Shape : std::uint8_t { None, Planar, Thick, Line, Sparse };
+    struct Evidence {
+        std::uint16_t hits = 0, passes = 0;
+        std::uint32_t last_hit = 0;   // scan number + 1 of the last hit (0: none)
+        std::uint32_t last_pass = 0;  // scan number + 1 of the last pass (written atomically)
+        Shape shape = Shape::None;
+        // Planar: the unit normal and the in-plane eigenvalues (regularised). Thick: unused.
+        float normal[3] = {0, 0, 0};
+        float lambda1 = 0, lambda2 = 0;
+        float mean[3] = {0, 0, 0};  // the voxel's mean (local frame), read without its statistics
+    };
+    void fit(const VoxelStats& stats, Evidence& e) const;
+    bool passes_through(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
+    bool off_surface(const VoxelGrid& grid, const Eigen::Vector3d& mu, const Eigen::Vector3d& p) const;
+
+    double margin_;
+    int min_scans_;
+    double range_;
+    double sigma2_;  // sigma0^2, set from the grid's voxel size
+    std::uint32_t scan_ = 0;
+    std::vector<Evidence> evidence_;  // per voxel of the grid, by its index
+    // The range image, kept from scan to scan (no page faults for fresh buffers).
+    std::vector<std::uint32_t> pixel_of_, nearest_;
+    std::vector<float> depth_, elevation_;
+};
+
+}  // namespace lidarsurf

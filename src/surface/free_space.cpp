@@ -1,0 +1,255 @@
+#include "lidarsurf/surface/free_space.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/surface/plane_eigen.hpp"
+
+namespace lidarsurf {
+namespace {
+
+constexpr double kChi2 = 4.0;           // two sigmas: the ray goes through the points, not beside them
+constexpr double kLinePlanarity = 0.05;  // lambda2 < this * lambda1: the points are a line (one ring)
+constexpr double kThinness = 0.25;       // lambda3 > this * lambda2: not one plane (a corner, foliage)
+
+// The range image: columns of kAzimuthStep degrees, rows of kElevationStep degrees (about the
+// angular resolution of a 64-beam sensor; a voxel is tested against its row and the rows beside it).
+constexpr float kAzimuthStep = 0.2f, kElevationStep = 0.4f;
+constexpr int kColumns = 1800;
+constexpr std::uint32_t kNoPixel = 0xffffffffu;
+
+// atan2 in degrees to within 0.001 degree (an 11th-order odd polynomial of atan on [0, 1]),
+// several times faster than std::atan2: the range image's bins are 0.2 degree wide.
+inline float atan2_deg(float y, float x) {
+    const float ax = std::fabs(x), ay = std::fabs(y);
+    const float mx = std::max(ax, ay), mn = std::min(ax, ay);
+    if (mx == 0) return 0;
+    const float a = mn / mx, a2 = a * a;
+    float r = a * (0.99997726f + a2 * (-0.33262347f + a2 * (0.19354346f + a2 * (-0.11643287f + a2 * (0.05265332f - 0.01172120f * a2)))));
+    if (ay > ax) r = 1.57079637f - r;
+    if (x < 0) r = 3.14159274f - r;
+    if (y < 0) r = -r;
+    return r * 57.2957795f;
+}
+inline float azimuth_deg(const Eigen::Vector3d& d) { return atan2_deg(static_cast<float>(d.y()), static_cast<float>(d.x())); }
+inline float elevation_deg(const Eigen::Vector3d& d) {
+    return atan2_deg(static_cast<float>(d.z()), static_cast<float>(std::sqrt(d.x() * d.x() + d.y() * d.y())));
+}
+
+}  // namespace
+
+FreeSpaceCarver::FreeSpaceCarver(double margin, int min_scans, double range) : margin_(margin), min_scans_(min_scans), range_(range), sigma2_(0) {
+    if (!std::isfinite(range) || range <= 0) throw InvalidArgument("carving range must be finite and > 0");
+    if (!std::isfinite(margin) || margin <= 0) throw InvalidArgument("carving margin must be finite and > 0");
+    if (min_scans < 1) throw InvalidArgument("carving min scans must be >= 1");
+}
+
+void FreeSpaceCarver::fit(const VoxelStats& stats, Evidence& e) const {
+    for (int i = 0; i < 3; ++i) e.mean[i] = static_cast<float>(stats.mean[i]);
+    e.shape = Shape::Sparse;
+    if (stats.count < static_cast<std::uint64_t>(kMinPoints)) return;
+    e.shape = Shape::None;
+    const Eigen::Matrix3d c = stats.covariance();
+    double l1, l2, l3;
+    Eigen::Vector3d n;
+    if (const auto eig = plane_eigen(c)) {
+        l1 = eig->lambda1, l2 = eig->lambda2, l3 = eig->lambda3, n = eig->e3;
+    } else {
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+        solver.computeDirect(c);
+        l3 = solver.eigenvalues()[0], l2 = solver.eigenvalues()[1], l1 = solver.eigenvalues()[2];
+        n = solver.eigenvectors().col(0);
+    }
+    if (!(l1 > 0)) return;
+    if (l2 < kLinePlanarity * l1) {
+        e.shape = Shape::Line;
+        return;
+    }
+    if (l3 > kThinness * l2) {
+        e.shape = Shape::Thick;
+        return;
+    }
+    e.shape = Shape::Planar;
+    for (int i = 0; i < 3; ++i) e.normal[i] = static_cast<float>(n[i]);
+    e.lambda1 = static_cast<float>(l1 + sigma2_);
+    e.lambda2 = static_cast<float>(l2 + sigma2_);
+}
+
+bool FreeSpaceCarver::passes_through(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d& mu = stats.mean;
+    const double sigma2 = e.shape == Shape::Sparse ? 4 * sigma2_ : sigma2_;  // a few points: a ball of alpha / 2
+    const Eigen::Matrix3d c = stats.covariance() + sigma2 * Eigen::Matrix3d::Identity();
+    if (e.shape == Shape::Planar) {
+        Eigen::Vector3d n(e.normal[0], e.normal[1], e.normal[2]);
+        double ds = n.dot(s - mu);
+        if (ds < 0) n = -n, ds = -ds;
+        const double dp = n.dot(p - mu);
+        if (dp > -margin_) return false;  // the return is not behind the plane by the margin
+        const Eigen::Vector3d d = s + (ds / (ds - dp)) * (p - s) - mu;  // where the ray crosses the plane
+        const double q0 = d.squaredNorm(), q1 = d.dot(c * d);
+        const double l1 = e.lambda1, l2 = e.lambda2;
+        return ((l1 + l2) * q0 - q1) <= kChi2 * l1 * l2;  // Eq. (3)'s in-plane form (docs/method.md)
+    }
+    const Eigen::Vector3d u = (p - s).normalized();
+    const Eigen::Matrix3d a = c.inverse();
+    const Eigen::Vector3d au = a * u;
+    const double t = au.dot(mu - s) / au.dot(u);
+    if (t <= 0 || (p - s).norm() - t < margin_) return false;
+    const Eigen::Vector3d d = s + t * u - mu;
+    return d.dot(a * d) <= kChi2;
+}
+
+bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, const Eigen::Vector3d& mu, const Eigen::Vector3d& p) const {
+    // The surface the ray returned on: the plane of the return's voxel when it has one, else the
+    // horizontal plane (z up) through the return. A voxel on it (the ground beyond a grazing
+    // ray's return, seen before by a ring) is not seen through.
+    Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+    if (const std::int32_t* slot = grid.index().find(grid.key_of_local(p)); slot && *slot >= 0) {
+        const Evidence& e = evidence_[static_cast<std::size_t>(*slot)];
+        if (e.shape == Shape::Planar) n = Eigen::Vector3d(e.normal[0], e.normal[1], e.normal[2]);
+    }
+    return std::fabs(n.dot(mu - p)) >= margin_;
+}
+
+CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vector3d> points, std::span<const VoxelGrid::Hit> hits,
+                                    const Eigen::Vector3d& viewpoint) {
+    CarvingStats out;
+    const double alpha = grid.voxel_size();
+    sigma2_ = (alpha / 8) * (alpha / 8);
+    const std::uint32_t stamp = ++scan_;
+    // 1. Hits: counted once per scan; the voxels whose statistics changed get their shape again.
+    const std::size_t before = evidence_.size();
+    evidence_.resize(grid.size());
+    std::vector<std::uint32_t> refit;
+    refit.reserve(hits.size() + grid.size() - before);
+    for (const VoxelGrid::Hit& h : hits) {
+        Evidence& e = evidence_[h.voxel];
+        if (e.last_hit == stamp) continue;
+        if (e.hits < UINT16_MAX) ++e.hits;
+        e.last_hit = stamp;
+        refit.push_back(h.voxel);
+    }
+    for (std::size_t v = before; v < grid.size(); ++v)
+        if (evidence_[v].last_hit != stamp) {  // integrated before carving started: one hit
+            evidence_[v].hits = 1;
+            refit.push_back(static_cast<std::uint32_t>(v));
+        }
+    const std::vector<VoxelStats>& stats = grid.stats();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, refit.size(), 1024), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) fit(stats[refit[i]], evidence_[refit[i]]);
+    });
+    // 2. The scan as a range image seen from the viewpoint: per pixel (azimuth x elevation) the
+    //    nearest return. Each occupied voxel within the scan's reach, not hit by it, is tested
+    //    against the returns of its pixel and of the pixels above and below it: the ray of one
+    //    of them went through its surface and returned behind it -> a pass.
+    const Eigen::Vector3d s = grid.to_local(viewpoint);
+    const std::size_t n = points.size();
+    pixel_of_.resize(n);
+    elevation_.resize(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            elevation_[i] = points[i].allFinite() ? elevation_deg(grid.to_local(points[i]) - s) : std::numeric_limits<float>::quiet_NaN();
+    });
+    float el_min = 90, el_max = -90;
+    for (float el : elevation_)
+        if (el == el) el_min = std::min(el_min, el), el_max = std::max(el_max, el);
+    if (!(el_max >= el_min)) return out;
+    const int rows = static_cast<int>((el_max - el_min) / kElevationStep) + 1;
+    const std::size_t pixels = static_cast<std::size_t>(rows) * kColumns;
+    const auto pixel = [&](const Eigen::Vector3d& d, float el) -> std::uint32_t {
+        const int row = static_cast<int>((el - el_min) / kElevationStep);
+        if (!(el >= el_min) || row >= rows) return kNoPixel;
+        const int col = static_cast<int>((azimuth_deg(d) + 180.f) / kAzimuthStep) % kColumns;
+        return static_cast<std::uint32_t>(row * kColumns + col);
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            pixel_of_[i] = elevation_[i] == elevation_[i] ? pixel(grid.to_local(points[i]) - s, elevation_[i]) : kNoPixel;
+    });
+    nearest_.assign(pixels, kNoPixel);  // point index of the pixel's nearest return
+    depth_.assign(pixels, std::numeric_limits<float>::infinity());
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t px = pixel_of_[i];
+        if (px == kNoPixel) continue;
+        const auto d = static_cast<float>((grid.to_local(points[i]) - s).squaredNorm());
+        if (d < depth_[px]) depth_[px] = d, nearest_[px] = static_cast<std::uint32_t>(i);
+    }
+    const std::vector<std::uint32_t>& nearest = nearest_;
+    const std::vector<float>& depth = depth_;
+    using Map = BlockMap<std::int32_t>;
+    constexpr int B = Map::kSize;
+    const Map& index = grid.index();
+    const double reach = range_ + B * alpha;  // block centres: the range plus half a block's diagonal
+    tbb::enumerable_thread_specific<std::vector<std::uint32_t>> passed;
+    tbb::enumerable_thread_specific<std::size_t> crossings(0);
+    const std::vector<VoxelKey>& block_keys = index.block_keys();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_keys.size(), 64), [&](const auto& r) {
+        std::vector<std::uint32_t>& mine = passed.local();
+        std::size_t& tested = crossings.local();
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            const Eigen::Vector3d centre = (block_keys[b].cast<double>() + Eigen::Vector3d::Constant(0.5)) * (B * alpha);
+            if ((centre - s).squaredNorm() > reach * reach) continue;
+            const VoxelGrid::Occupancy& occupied = grid.occupancy(b);
+            const Map::Block& block = index.block_at(b);
+            for (int layer = 0; layer < B; ++layer)
+                for (std::uint64_t bits = occupied[static_cast<std::size_t>(layer)]; bits; bits &= bits - 1) {
+                    const int bit = std::countr_zero(bits);
+                    const auto v = static_cast<std::uint32_t>(block[static_cast<std::size_t>(bit | layer << 6)]);
+                    Evidence& e = evidence_[v];
+                    if (e.last_hit == stamp || e.shape == Shape::None) continue;
+                    const Eigen::Vector3d d = Eigen::Vector3d(e.mean[0], e.mean[1], e.mean[2]) - s;
+                    const double range = d.norm();
+                    if (range > range_) continue;
+                    const std::uint32_t px = pixel(d, elevation_deg(d));
+                    if (px == kNoPixel) continue;
+                    // A return that can be behind the voxel's surface by the margin is at least
+                    // margin - alpha farther than its mean (the crossing lies within alpha of it).
+                    const double behind = range + margin_ - alpha;
+                    const float need = behind > 0 ? static_cast<float>(behind * behind) : 0.f;
+                    bool pass = false;
+                    for (int dr = -1; dr <= 1 && !pass; ++dr) {
+                        const std::int64_t q = static_cast<std::int64_t>(px) + dr * kColumns;
+                        if (q < 0 || q >= static_cast<std::int64_t>(pixels) || nearest[static_cast<std::size_t>(q)] == kNoPixel) continue;
+                        if (depth[static_cast<std::size_t>(q)] < need) continue;
+                        ++tested;
+                        const VoxelStats& st = stats[v];
+                        const Eigen::Vector3d p = grid.to_local(points[nearest[static_cast<std::size_t>(q)]]);
+                        pass = passes_through(st, e, s, p) && (e.shape == Shape::Planar || off_surface(grid, st.mean, p));
+                    }
+                    if (pass) {
+                        e.last_pass = stamp;
+                        mine.push_back(v);
+                    }
+                }
+        }
+    });
+    out.rays = pixels;
+    for (std::size_t c : crossings) out.crossings += c;
+    // 3. Passes, counted once per scan; removal in decreasing index order (each removal moves the
+    //    last voxel, which is then never one still to remove).
+    std::vector<std::uint32_t> pass;
+    for (const auto& mine : passed) pass.insert(pass.end(), mine.begin(), mine.end());
+    std::sort(pass.begin(), pass.end());
+    out.passes = pass.size();
+    std::vector<std::uint32_t> carved;
+    for (std::uint32_t v : pass) {
+        Evidence& e = evidence_[v];
+        if (e.passes < UINT16_MAX) ++e.passes;
+        if (e.passes >= min_scans_ && e.passes > e.hits) carved.push_back(v);
+    }
+    for (auto it = carved.rbegin(); it != carved.rend(); ++it) {
+        const std::size_t moved = grid.remove(*it);
+        evidence_[*it] = evidence_[moved];
+        evidence_.pop_back();
+    }
+    out.removed = carved.size();
+    return out;
+}
+
+}  // namespace lidarsurf
