@@ -21,6 +21,7 @@
 #include "file_roles.hpp"
 #include "progress.hpp"
 #include "lidarsurf/eval/map_metrics.hpp"
+#include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
@@ -93,11 +94,6 @@ std::vector<std::string> split(const std::string& s) {
     return out;
 }
 
-double percentile(std::vector<double> v, double q) {
-    if (v.empty()) return 0;
-    std::sort(v.begin(), v.end());
-    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
-}
 
 }  // namespace
 
@@ -180,7 +176,7 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
         const DriveCrop near(drive, 5.0);
         for (const Eigen::Vector3d& p : gt)
             if (near.contains(p)) road.push_back(p.z());
-        eval.ground_z = percentile(road, 0.5);
+        eval.ground_z = summarize(road).median;
     }
 
     // 3. Score every map.
@@ -250,12 +246,13 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
             std::vector<double> per_frame_ms;
             for (const auto& f : report.at("per_frame"))
                 per_frame_ms.push_back(f.value("integrate_ms", 0.0) + f.value("remesh_ms", 0.0));
-            j["per_frame_ms_median"] = percentile(per_frame_ms, 0.5);
-            j["per_frame_ms_p95"] = percentile(per_frame_ms, 0.95);
-            j["per_frame_ms_max"] = percentile(per_frame_ms, 1.0);
+            const DirectedError t = summarize(per_frame_ms);
+            j["per_frame_ms_median"] = t.median;
+            j["per_frame_ms_p90"] = t.p90;
+            j["per_frame_ms_max"] = t.max;
             if (row.name == "remesh-every-1") {
-                std::snprintf(line, sizeof line, "Meshing after every scan (integrate + extract): median %.1f ms, p95 %.1f ms, max %.1f ms per scan.\n",
-                              percentile(per_frame_ms, 0.5), percentile(per_frame_ms, 0.95), percentile(per_frame_ms, 1.0));
+                std::snprintf(line, sizeof line, "Meshing after every scan (integrate + extract): median %.1f ms, p90 %.1f ms, max %.1f ms per scan.\n",
+                              t.median, t.p90, t.max);
                 remesh_line = line;
             }
         }

@@ -152,9 +152,13 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     const std::size_t n = points.size();
     pixel_of_.resize(n);
     elevation_.resize(n);
+    range2_.resize(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i)
-            elevation_[i] = points[i].allFinite() ? elevation_deg(grid.to_local(points[i]) - s) : std::numeric_limits<float>::quiet_NaN();
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const Eigen::Vector3d d = grid.to_local(points[i]) - s;
+            elevation_[i] = points[i].allFinite() ? elevation_deg(d) : std::numeric_limits<float>::quiet_NaN();
+            range2_[i] = static_cast<float>(d.squaredNorm());
+        }
     });
     float el_min = 90, el_max = -90;
     for (float el : elevation_)
@@ -177,7 +181,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t px = pixel_of_[i];
         if (px == kNoPixel) continue;
-        const auto d = static_cast<float>((grid.to_local(points[i]) - s).squaredNorm());
+        const float d = range2_[i];
         if (d < depth_[px]) depth_[px] = d, nearest_[px] = static_cast<std::uint32_t>(i);
     }
     const std::vector<std::uint32_t>& nearest = nearest_;

@@ -56,7 +56,7 @@ public:
     std::uint32_t scans() const { return scan_; }
     std::size_t memory_bytes() const {
         return evidence_.capacity() * sizeof(Evidence) + (pixel_of_.capacity() + nearest_.capacity()) * sizeof(std::uint32_t) +
-               (depth_.capacity() + elevation_.capacity()) * sizeof(float);
+               (depth_.capacity() + elevation_.capacity() + range2_.capacity()) * sizeof(float);
     }
 
     /// The evidence of voxel `voxel` (an index into the grid's stats()).
@@ -89,7 +89,7 @@ private:
     std::vector<Evidence> evidence_;  // per voxel of the grid, by its index
     // The range image, kept from scan to scan (no page faults for fresh buffers).
     std::vector<std::uint32_t> pixel_of_, nearest_;
-    std::vector<float> depth_, elevation_;
+    std::vector<float> depth_, elevation_, range2_;  // per pixel; per point (elevation, squared range)
 };
 
 }  // namespace lidarsurf
