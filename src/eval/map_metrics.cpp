@@ -93,10 +93,7 @@ MapMetrics evaluate_map(const Mesh& mesh, const MeshDistance& truth, const std::
         MapMetrics m;
         // Samples: area-weighted, so each stands for the same area of the whole mesh.
         double total_area = 0;
-        for (const auto& t : mesh.triangles) {
-            const Eigen::Vector3d& a = mesh.vertices[t[0]];
-            total_area += 0.5 * (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a).norm();
-        }
+        for (std::size_t i = 0; i < mesh.triangles.size(); ++i) total_area += mesh.triangle_area(i);
         std::vector<Eigen::Vector3d> all = sample_surface(mesh, config.sample_spacing, config.max_samples, config.seed);
         if (all.empty()) throw InvalidInput("the map to evaluate has no area");
         const double area_per_sample = total_area / static_cast<double>(all.size());

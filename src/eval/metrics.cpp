@@ -97,9 +97,7 @@ std::vector<Eigen::Vector3d> sample_surface(const Mesh& mesh, double spacing, st
     std::vector<double> cumulative(mesh.triangles.size());
     double total = 0;
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-        const auto& t = mesh.triangles[i];
-        const Eigen::Vector3d& a = mesh.vertices[t[0]];
-        total += 0.5 * (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a).norm();
+        total += mesh.triangle_area(i);
         cumulative[i] = total;
     }
     std::vector<Eigen::Vector3d> out;

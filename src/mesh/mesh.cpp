@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include <Eigen/Geometry>
+
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
@@ -19,6 +21,12 @@ void Mesh::check() const {
     for (const auto& t : triangles)
         for (std::uint32_t i : t)
             if (i >= n) throw InvalidInput("mesh triangle refers to vertex " + std::to_string(i) + " of " + std::to_string(n));
+}
+
+double Mesh::triangle_area(std::size_t i) const {
+    const auto& t = triangles[i];
+    const Eigen::Vector3d& a = vertices[t[0]];
+    return 0.5 * (vertices[t[1]] - a).cross(vertices[t[2]] - a).norm();
 }
 
 }  // namespace lidarsurf

@@ -1,6 +1,7 @@
 #pragma once
 // Indexed triangle mesh with the per-vertex attributes of the reconstruction.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -18,6 +19,8 @@ struct Mesh {
     bool empty() const { return triangles.empty(); }
     /// Throws InvalidInput if attribute sizes or triangle indices are inconsistent.
     void check() const;
+    /// Area of triangle `i`, m^2 (half the norm of the edge cross product).
+    double triangle_area(std::size_t i) const;
 };
 
 }  // namespace lidarsurf
