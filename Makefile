@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl install package-check pip-check viewer-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl map-peers install package-check pip-check viewer-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -82,6 +82,19 @@ accuracy-pcl:
 	cmake --build $(PCL_BUILD) -j $(JOBS) --target lidarsurf_pcl_peer
 	$(PCL_BUILD)/bin/lidarsurf_pcl_peer $(ACCURACY_DIR)/town $(ACCURACY_DIR)/town/peers
 	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --methods default --peers $(ACCURACY_DIR)/town/peers --no-plots --out $(ACCURACY_DIR)/table-pcl
+
+# VDBFusion as a peer of the map benchmark (OpenVDB: its own build directory, not in make test). Its
+# core is extracted from ../shared/peers into the build directory; then
+#   lidarsurf map-benchmark DRIVE --vdbfusion $(PEERS_BUILD)/bin/lidarsurf_vdbfusion_peer --rows ...
+PEERS_BUILD ?= build-peers
+VDBFUSION_ARCHIVE ?= $(firstword $(wildcard ../shared/peers/vdbfusion-core-*.tar.gz))
+map-peers:
+	@bash scripts/setup.sh vdbfusion
+	@test -n "$(VDBFUSION_ARCHIVE)" || { echo "no VDBFusion archive: set VDBFUSION_ARCHIVE=path/to/vdbfusion-core-*.tar.gz"; exit 2; }
+	mkdir -p $(PEERS_BUILD)/vdbfusion-src
+	tar -xzf $(VDBFUSION_ARCHIVE) -C $(PEERS_BUILD)/vdbfusion-src
+	cmake -S . -B $(PEERS_BUILD) -DCMAKE_BUILD_TYPE=Release -DLIDARSURF_BUILD_VDBFUSION_PEER=ON -DVDBFUSION_SOURCE_DIR=$(CURDIR)/$(PEERS_BUILD)/vdbfusion-src/src/vdbfusion/vdbfusion -DLIDARSURF_BUILD_TESTS=OFF -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
+	cmake --build $(PEERS_BUILD) -j $(JOBS) --target lidarsurf_vdbfusion_peer
 
 # The Python package in the build tree: PYTHONPATH=$(BUILD)/python /usr/bin/python3 -c 'import lidarsurf'
 python: build

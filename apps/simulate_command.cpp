@@ -43,6 +43,8 @@ sim::World load_world(const SimulateOptions& o) {
     sc.seed = o.seed;
     sc.length = o.length;
     sc.moving_cars = o.moving_cars;
+    sc.pedestrians = o.pedestrians;
+    sc.cyclists = o.cyclists;
     return sim::make_world(sc);
 }
 
@@ -108,6 +110,8 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
     sc->add_option("--seed", o.seed, "Scene and noise seed")->capture_default_str();
     sc->add_option("--length", o.length, "Street / track length in metres (town, offroad)")->capture_default_str();
     sc->add_option("--moving-cars", o.moving_cars, "Cars driving in the opposite lane (town)")->capture_default_str();
+    sc->add_option("--pedestrians", o.pedestrians, "People walking the sidewalks (town)")->capture_default_str();
+    sc->add_option("--cyclists", o.cyclists, "Cyclists riding beside the opposite lane (town)")->capture_default_str();
     sc->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     sc->add_option("--from", o.from, "Mesh scene: ground point where the drive starts, x,y,z");
     sc->add_option("--to", o.to, "Mesh scene: ground point where it ends (default 10 m along +x)");

@@ -31,6 +31,8 @@ if [ "${1:-}" = "tsan" ]; then PKGS+=(curl xz-utils ca-certificates); fi
 if [ "${1:-}" = "peers" ]; then PKGS+=(python3-open3d); fi
 # `setup.sh pcl`: PCL for tools/pcl_peer (make accuracy-pcl; about 380 packages).
 if [ "${1:-}" = "pcl" ]; then PKGS+=(libpcl-dev); fi
+# `setup.sh vdbfusion`: OpenVDB for tools/vdbfusion_peer (make map-peers).
+if [ "${1:-}" = "vdbfusion" ]; then PKGS+=(libopenvdb-dev); fi
 # `setup.sh viewer`: Chromium, which renders the viewer's page in its test (make viewer-check).
 if [ "${1:-}" = "viewer" ]; then PKGS+=(chromium); fi
 

@@ -56,6 +56,32 @@ Mesh car_body(Rng& rng) {
     return b.take();
 }
 
+/// A pedestrian in its own frame (x forward, feet at z = 0): legs, torso, arms and head, 1.6-1.9 m.
+Mesh pedestrian_body(Rng& rng) {
+    MeshBuilder b;
+    const double h = rng.uniform(1.6, 1.9), hip = 0.5 * h, shoulder = 0.82 * h;
+    for (double s : {-1.0, 1.0}) {
+        b.box_between({-0.08, s * 0.11 - 0.07, 0.0}, {0.08, s * 0.11 + 0.07, hip});                   // leg
+        b.box_between({-0.06, s * 0.25 - 0.05, hip + 0.05}, {0.06, s * 0.25 + 0.05, shoulder});         // arm
+    }
+    b.box_between({-0.12, -0.2, hip}, {0.12, 0.2, shoulder + 0.03});                                    // torso
+    b.box_between({-0.1, -0.08, shoulder + 0.06}, {0.1, 0.08, h});                                      // head
+    return b.take();
+}
+
+/// A cyclist in its own frame (x forward, wheels on z = 0): a bicycle (two wheels, frame) and a rider.
+Mesh cyclist_body(Rng& rng) {
+    MeshBuilder b;
+    const double r = 0.34, base = 1.05;
+    for (double x : {-base / 2, base / 2}) b.cylinder({x, -0.02, r}, {x, 0.02, r}, r, 16);               // wheels
+    b.box_between({-base / 2, -0.03, r}, {base / 2, 0.03, r + 0.35});                                   // frame
+    const double h = rng.uniform(1.6, 1.85);
+    b.box_between({-0.25, -0.18, r + 0.45}, {0.05, 0.18, r + 0.5 + 0.35 * h});                          // rider's torso
+    b.box_between({-0.05, -0.08, r + 0.52 + 0.35 * h}, {0.13, 0.08, r + 0.7 + 0.35 * h});             // head
+    for (double s : {-1.0, 1.0}) b.box_between({-0.15, s * 0.12 - 0.05, r}, {0.05, s * 0.12 + 0.05, r + 0.5});  // legs
+    return b.take();
+}
+
 void place(MeshBuilder& b, const Mesh& body, const V& at, double yaw) {
     const Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, V::UnitZ()).toRotationMatrix();
     Mesh m = body;
@@ -180,6 +206,29 @@ void make_town(World& w, Rng& rng) {
         m.x_max = half - 3;
         w.movers.push_back(std::move(m));
     }
+    // Pedestrians walk the sidewalk of one block (clear of lampposts, signs and trees) either way,
+    // wrapping within it; cyclists ride between the centre line and the opposite lane's cars, in the
+    // drive's direction, slower than it.
+    for (int i = 0; i < w.config.pedestrians; ++i) {
+        Mover m;
+        m.body = pedestrian_body(rng);
+        const double side = rng.chance(0.5) ? 1.0 : -1.0;
+        const auto& [bx0, bx1] = blocks[static_cast<std::size_t>(rng.uniform(0.0, 2.999))];
+        m.x_min = bx0 + 1;
+        m.x_max = bx1 - 1;
+        m.start = {rng.uniform(m.x_min, m.x_max), side * rng.uniform(6.2, 6.8), kCurb};
+        m.speed = (rng.chance(0.5) ? 1.0 : -1.0) * rng.uniform(1.1, 1.7);
+        w.movers.push_back(std::move(m));
+    }
+    for (int i = 0; i < w.config.cyclists; ++i) {
+        Mover m;
+        m.body = cyclist_body(rng);
+        m.start = {rng.uniform(-half + 3, half - 3), 0.45, 0.0};
+        m.speed = rng.uniform(4.0, 6.5);
+        m.x_min = -half + 3;
+        m.x_max = half - 3;
+        w.movers.push_back(std::move(m));
+    }
     const double margin = 35.0;
     for (double x = -half + margin; x <= half - margin + 1e-9; x += 1.0) w.path.push_back({x, -1.75, 0.0});
 }
@@ -257,6 +306,8 @@ const char* to_string(SceneKind kind) { return kind == SceneKind::Town ? "town" 
 void SceneConfig::validate() const {
     if (!(length >= 80 && length <= 5000)) throw InvalidArgument("scene length must be in [80, 5000] m");
     if (moving_cars < 0 || moving_cars > 100) throw InvalidArgument("moving cars must be in [0, 100]");
+    if (pedestrians < 0 || pedestrians > 500) throw InvalidArgument("pedestrians must be in [0, 500]");
+    if (cyclists < 0 || cyclists > 100) throw InvalidArgument("cyclists must be in [0, 100]");
     if (!(ego_speed > 0 && ego_speed <= 100)) throw InvalidArgument("ego speed must be in (0, 100] m/s");
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
 #include <tbb/enumerable_thread_specific.h>
@@ -44,7 +45,8 @@ inline float elevation_deg(const Eigen::Vector3d& d) {
 
 }  // namespace
 
-FreeSpaceCarver::FreeSpaceCarver(double margin, int min_scans, double range) : margin_(margin), min_scans_(min_scans), range_(range), sigma2_(0) {
+FreeSpaceCarver::FreeSpaceCarver(double margin, int min_scans, double range)
+    : margin_(margin), min_scans_(min_scans), range_(range), sigma2_(0) {
     if (!std::isfinite(range) || range <= 0) throw InvalidArgument("carving range must be finite and > 0");
     if (!std::isfinite(margin) || margin <= 0) throw InvalidArgument("carving margin must be finite and > 0");
     if (min_scans < 1) throw InvalidArgument("carving min scans must be >= 1");
@@ -81,38 +83,79 @@ void FreeSpaceCarver::fit(const VoxelStats& stats, Evidence& e) const {
     e.lambda2 = static_cast<float>(l2 + sigma2_);
 }
 
-bool FreeSpaceCarver::passes_through(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d& mu = stats.mean;
+Eigen::Matrix3d FreeSpaceCarver::covariance(const VoxelStats& stats, const Evidence& e) const {
     const double sigma2 = e.shape == Shape::Sparse ? 4 * sigma2_ : sigma2_;  // a few points: a ball of alpha / 2
-    const Eigen::Matrix3d c = stats.covariance() + sigma2 * Eigen::Matrix3d::Identity();
-    if (e.shape == Shape::Planar) {
-        Eigen::Vector3d n(e.normal[0], e.normal[1], e.normal[2]);
-        double ds = n.dot(s - mu);
-        if (ds < 0) n = -n, ds = -ds;
-        const double dp = n.dot(p - mu);
-        if (dp > -margin_) return false;  // the return is not behind the plane by the margin
-        const Eigen::Vector3d d = s + (ds / (ds - dp)) * (p - s) - mu;  // where the ray crosses the plane
-        const double q0 = d.squaredNorm(), q1 = d.dot(c * d);
-        const double l1 = e.lambda1, l2 = e.lambda2;
-        return ((l1 + l2) * q0 - q1) <= kChi2 * l1 * l2;  // Eq. (3)'s in-plane form (docs/method.md)
-    }
+    return stats.covariance() + sigma2 * Eigen::Matrix3d::Identity();
+}
+
+bool FreeSpaceCarver::crosses_plane(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d& mu = stats.mean;
+    Eigen::Vector3d n(e.normal[0], e.normal[1], e.normal[2]);
+    double ds = n.dot(s - mu);
+    if (ds < 0) n = -n, ds = -ds;
+    const double dp = n.dot(p - mu);
+    if (dp > -margin_) return false;  // the return is not behind the plane by the margin
+    const Eigen::Vector3d d = s + (ds / (ds - dp)) * (p - s) - mu;  // where the ray crosses the plane
+    const double q0 = d.squaredNorm(), q1 = d.dot(covariance(stats, e) * d);
+    const double l1 = e.lambda1, l2 = e.lambda2;
+    return ((l1 + l2) * q0 - q1) <= kChi2 * l1 * l2;  // Eq. (3)'s in-plane form (docs/method.md)
+}
+
+bool FreeSpaceCarver::passes_near(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d& mu = stats.mean;
     const Eigen::Vector3d u = (p - s).normalized();
-    const Eigen::Matrix3d a = c.inverse();
+    const Eigen::Matrix3d a = covariance(stats, e).inverse();
     const Eigen::Vector3d au = a * u;
-    const double t = au.dot(mu - s) / au.dot(u);
+    const double t = au.dot(mu - s) / au.dot(u);  // the point of the ray nearest the mean (Mahalanobis)
     if (t <= 0 || (p - s).norm() - t < margin_) return false;
     const Eigen::Vector3d d = s + t * u - mu;
     return d.dot(a * d) <= kChi2;
 }
 
-bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, const Eigen::Vector3d& mu, const Eigen::Vector3d& p) const {
+std::optional<Eigen::Vector3d> FreeSpaceCarver::image_normal(std::span<const Eigen::Vector3d> points, std::uint32_t q) const {
+    // Tangents from the returns of the neighbouring pixels (the nearest within two columns and
+    // within two rows) on the same surface: a range within 5 % (0.3 m at least) of the return's.
+    // The ground far away has its rings metres apart: no vertical tangent there.
+    const int row = static_cast<int>(q / kColumns), col = static_cast<int>(q % kColumns);
+    const float r = std::sqrt(depth_[q]), tolerance = std::max(0.3f, 0.05f * r);
+    const Eigen::Vector3d& p = points[nearest_[q]];
+    const auto neighbour = [&](int dr, int dc) -> const Eigen::Vector3d* {
+        for (int k = 1; k <= 2; ++k) {
+            const int rr = row + k * dr, cc = (col + k * dc + kColumns) % kColumns;
+            if (rr < 0 || rr >= rows_) return nullptr;
+            const std::size_t i = static_cast<std::size_t>(rr) * kColumns + static_cast<std::size_t>(cc);
+            if (nearest_[i] == kNoPixel) continue;
+            return std::fabs(std::sqrt(depth_[i]) - r) <= tolerance ? &points[nearest_[i]] : nullptr;
+        }
+        return nullptr;
+    };
+    const auto tangent = [&](const Eigen::Vector3d* a, const Eigen::Vector3d* b) -> std::optional<Eigen::Vector3d> {
+        if (a && b) return *a - *b;
+        if (a) return *a - p;
+        if (b) return p - *b;
+        return std::nullopt;
+    };
+    const auto along = tangent(neighbour(0, 1), neighbour(0, -1)), across = tangent(neighbour(1, 0), neighbour(-1, 0));
+    if (!along || !across) return std::nullopt;
+    const Eigen::Vector3d n = along->cross(*across);
+    const double norm = n.norm();
+    if (!(norm > 1e-6 * along->norm() * across->norm())) return std::nullopt;
+    return n / norm;
+}
+
+bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, std::uint32_t q) const {
     // The surface the ray returned on: the plane of the return's voxel when it has one, else the
-    // horizontal plane (z up) through the return. A voxel on it (the ground beyond a grazing
-    // ray's return, seen before by a ring) is not seen through.
+    // normal of the range image at the return, else the horizontal plane (z up) through the
+    // return. A voxel on it (the ground beyond a grazing ray's return, seen before by a ring) is
+    // not seen through; the rear of a car that drove on, a vertical surface, is.
+    const Eigen::Vector3d p = grid.to_local(points[nearest_[q]]);
     Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
-    if (const std::int32_t* slot = grid.index().find(grid.key_of_local(p)); slot && *slot >= 0) {
+    const std::int32_t* slot = grid.index().find(grid.key_of_local(p));
+    if (slot && *slot >= 0 && evidence_[static_cast<std::size_t>(*slot)].shape == Shape::Planar) {
         const Evidence& e = evidence_[static_cast<std::size_t>(*slot)];
-        if (e.shape == Shape::Planar) n = Eigen::Vector3d(e.normal[0], e.normal[1], e.normal[2]);
+        n = Eigen::Vector3d(e.normal[0], e.normal[1], e.normal[2]);
+    } else if (const auto image = image_normal(points, q)) {
+        n = *image;
     }
     return std::fabs(n.dot(mu - p)) >= margin_;
 }
@@ -140,6 +183,20 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
             evidence_[v].hits = 1;
             refit.push_back(static_cast<std::uint32_t>(v));
         }
+    // The young voxels: those still young, then the new ones (a key removed and hit again is new).
+    std::size_t kept = 0;
+    young_slots_.clear();
+    for (const VoxelKey& key : young_) {
+        const std::int32_t* slot = grid.index().find(key);
+        if (!slot || *slot < 0 || static_cast<std::size_t>(*slot) >= before || evidence_[static_cast<std::size_t>(*slot)].hits > kYoungHits) continue;
+        young_slots_.push_back(static_cast<std::uint32_t>(*slot));
+        young_[kept++] = key;
+    }
+    young_.resize(kept);
+    for (std::size_t v = before; v < grid.size(); ++v) {
+        young_.push_back(grid.keys()[v]);
+        young_slots_.push_back(static_cast<std::uint32_t>(v));
+    }
     const std::vector<VoxelStats>& stats = grid.stats();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, refit.size(), 1024), [&](const auto& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) fit(stats[refit[i]], evidence_[refit[i]]);
@@ -165,6 +222,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
         if (el == el) el_min = std::min(el_min, el), el_max = std::max(el_max, el);
     if (!(el_max >= el_min)) return out;
     const int rows = static_cast<int>((el_max - el_min) / kElevationStep) + 1;
+    rows_ = rows;
     const std::size_t pixels = static_cast<std::size_t>(rows) * kColumns;
     const auto pixel = [&](const Eigen::Vector3d& d, float el) -> std::uint32_t {
         const int row = static_cast<int>((el - el_min) / kElevationStep);
@@ -192,6 +250,37 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     const double reach = range_ + B * alpha;  // block centres: the range plus half a block's diagonal
     tbb::enumerable_thread_specific<std::vector<std::uint32_t>> passed;
     tbb::enumerable_thread_specific<std::size_t> crossings(0);
+    // One voxel against the scan: within `limit` of the viewpoint, not hit by the scan, one of the
+    // returns of its pixel and of the pixels above and below saw through it.
+    const auto test = [&](std::uint32_t v, double limit, std::vector<std::uint32_t>& mine, std::size_t& tested) {
+        Evidence& e = evidence_[v];
+        if (e.last_hit == stamp || e.shape == Shape::None) return;
+        const Eigen::Vector3d d = Eigen::Vector3d(e.mean[0], e.mean[1], e.mean[2]) - s;
+        const double range = d.norm();
+        if (range > limit) return;
+        const std::uint32_t px = pixel(d, elevation_deg(d));
+        if (px == kNoPixel) return;
+        // A return that can be behind the voxel's surface by the margin is at least
+        // margin - alpha farther than its mean (the crossing lies within alpha of it).
+        const double behind = range + margin_ - alpha;
+        const float need = behind > 0 ? static_cast<float>(behind * behind) : 0.f;
+        for (int dr = -1; dr <= 1; ++dr) {
+            const std::int64_t q = static_cast<std::int64_t>(px) + dr * kColumns;
+            if (q < 0 || q >= static_cast<std::int64_t>(pixels) || nearest[static_cast<std::size_t>(q)] == kNoPixel) continue;
+            if (depth[static_cast<std::size_t>(q)] < need) continue;
+            ++tested;
+            const VoxelStats& st = stats[v];
+            const Eigen::Vector3d p = grid.to_local(points[nearest[static_cast<std::size_t>(q)]]);
+            if ((e.shape == Shape::Planar && crosses_plane(st, e, s, p)) ||
+                ((e.shape != Shape::Planar || e.hits <= kYoungHits) && passes_near(st, e, s, p) &&
+                 off_surface(grid, points, st.mean, static_cast<std::uint32_t>(q)))) {
+                e.last_pass = stamp;
+                mine.push_back(v);
+                return;
+            }
+        }
+    };
+    // 2a. Every voxel within the range, block by block.
     const std::vector<VoxelKey>& block_keys = index.block_keys();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_keys.size(), 64), [&](const auto& r) {
         std::vector<std::uint32_t>& mine = passed.local();
@@ -204,33 +293,21 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
             for (int layer = 0; layer < B; ++layer)
                 for (std::uint64_t bits = occupied[static_cast<std::size_t>(layer)]; bits; bits &= bits - 1) {
                     const int bit = std::countr_zero(bits);
-                    const auto v = static_cast<std::uint32_t>(block[static_cast<std::size_t>(bit | layer << 6)]);
-                    Evidence& e = evidence_[v];
-                    if (e.last_hit == stamp || e.shape == Shape::None) continue;
-                    const Eigen::Vector3d d = Eigen::Vector3d(e.mean[0], e.mean[1], e.mean[2]) - s;
-                    const double range = d.norm();
-                    if (range > range_) continue;
-                    const std::uint32_t px = pixel(d, elevation_deg(d));
-                    if (px == kNoPixel) continue;
-                    // A return that can be behind the voxel's surface by the margin is at least
-                    // margin - alpha farther than its mean (the crossing lies within alpha of it).
-                    const double behind = range + margin_ - alpha;
-                    const float need = behind > 0 ? static_cast<float>(behind * behind) : 0.f;
-                    bool pass = false;
-                    for (int dr = -1; dr <= 1 && !pass; ++dr) {
-                        const std::int64_t q = static_cast<std::int64_t>(px) + dr * kColumns;
-                        if (q < 0 || q >= static_cast<std::int64_t>(pixels) || nearest[static_cast<std::size_t>(q)] == kNoPixel) continue;
-                        if (depth[static_cast<std::size_t>(q)] < need) continue;
-                        ++tested;
-                        const VoxelStats& st = stats[v];
-                        const Eigen::Vector3d p = grid.to_local(points[nearest[static_cast<std::size_t>(q)]]);
-                        pass = passes_through(st, e, s, p) && (e.shape == Shape::Planar || off_surface(grid, st.mean, p));
-                    }
-                    if (pass) {
-                        e.last_pass = stamp;
-                        mine.push_back(v);
-                    }
+                    test(static_cast<std::uint32_t>(block[static_cast<std::size_t>(bit | layer << 6)]), range_, mine, tested);
                 }
+        }
+    });
+    // 2b. Beyond the range, the young voxels only (at most kYoungHits scans hit them): a moving
+    //     object seen from afar, once or twice, is tested by every later scan that can see
+    //     through it, at the cost of a few voxels instead of every static surface in sight.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, young_slots_.size(), 1024), [&](const auto& r) {
+        std::vector<std::uint32_t>& mine = passed.local();
+        std::size_t& tested = crossings.local();
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const std::uint32_t v = young_slots_[i];
+            const Evidence& e = evidence_[v];
+            const Eigen::Vector3d d = Eigen::Vector3d(e.mean[0], e.mean[1], e.mean[2]) - s;
+            if (d.squaredNorm() > range_ * range_) test(v, std::numeric_limits<double>::infinity(), mine, tested);
         }
     });
     out.rays = pixels;

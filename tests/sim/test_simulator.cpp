@@ -70,6 +70,39 @@ TEST(ProceduralScene, MoversDriveAlongTheStreetAndWrap) {
     }
 }
 
+TEST(ProceduralScene, PedestriansWalkTheSidewalksAndCyclistsRideTheRoadClearOfEverything) {
+    SceneConfig c = small(SceneKind::Town);
+    c.pedestrians = 12;
+    c.cyclists = 4;
+    const World w = make_world(c);
+    ASSERT_EQ(w.movers.size(), 3u + 12u + 4u);
+    // The same street as without them (they are drawn after it).
+    SceneConfig plain = small(SceneKind::Town);
+    EXPECT_EQ(make_world(plain).static_mesh.vertices, w.static_mesh.vertices);
+    const MeshScene scene(w.static_mesh);
+    for (std::size_t i = 3; i < w.movers.size(); ++i) {
+        const Mover& m = w.movers[i];
+        const bool walker = i < 15;
+        for (double t : {0.0, 7.0, 31.0}) {
+            const Eigen::Vector3d p = m.position_at(t);
+            // Standing on the sidewalk (z = 0.15 from |y| = 5 to 9) or riding on the road (z = 0).
+            const auto down = scene.intersect(p + Eigen::Vector3d(0, 0, 1.0), -Eigen::Vector3d::UnitZ(), 5.0);
+            ASSERT_TRUE(down);
+            EXPECT_NEAR(p.z() + 1.0 - *down, walker ? 0.15 : 0.0, 1e-6) << "mover " << i << " t " << t;  // the ground under it
+            EXPECT_NEAR(p.z(), walker ? 0.15 : 0.0, 1e-12);  // feet and wheels on that ground
+            EXPECT_EQ(std::abs(p.y()) > 5.0, walker);
+            // Nothing static within its body's reach (0.6 m around, up to 1.5 m high): no pole, tree,
+            // sign or parked car in the way.
+            for (double z : {0.3, 1.0, 1.5})
+                for (int a = 0; a < 16; ++a) {
+                    const Eigen::Vector3d d(std::cos(a * M_PI / 8), std::sin(a * M_PI / 8), 0);
+                    EXPECT_FALSE(scene.intersect(p + Eigen::Vector3d(0, 0, z), d, 0.6)) << "mover " << i << " t " << t << " z " << z;
+                }
+        }
+        EXPECT_LE(std::abs(m.speed), walker ? 1.7 : 6.5);
+    }
+}
+
 TEST(Simulator, ReturnsLieOnTheSceneSurface) {
     for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
         SimulatorConfig cfg;

@@ -29,6 +29,8 @@ struct SceneConfig {
     std::uint64_t seed = 1;
     double length = 240.0;    ///< metres of street / track along x
     int moving_cars = 3;      ///< town: cars in the opposite lane
+    int pedestrians = 0;      ///< town: people walking the sidewalks, both ways (1.1-1.7 m/s)
+    int cyclists = 0;         ///< town: bicycles beside the opposite lane, in the drive's direction (4-6.5 m/s)
     double ego_speed = 8.0;   ///< m/s of the sensor rig along the path (sets the frame times)
 
     void validate() const;

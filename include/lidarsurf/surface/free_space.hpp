@@ -11,17 +11,20 @@
 //
 // "Saw through": the scan is a range image from its viewpoint (the nearest return per 0.2 x 0.4
 // degree pixel). Each occupied voxel within `range`, not hit by the scan, is tested against the
-// returns of its pixel and of the pixels above and below; the voxel's points are a Gaussian
+// returns of its pixel and of the pixels above and below; beyond `range` only the young voxels
+// (hit by at most kYoungHits scans: a car seen from afar) are. The voxel's points are a Gaussian
 // (mean, covariance + sigma0^2 I, sigma0 = alpha / 8, alpha / 4 for fewer than kMinPoints):
 //  - planar voxel: the return's ray crosses the voxel's plane inside the points' in-plane ellipse
 //    (two sigmas) and the return lies at least `margin` behind that plane. A grazing ray over the
 //    ground returns on the same plane and never counts;
-//  - other voxels (a line of one ring, a corner, foliage, a few points): the ray passes within two
-//    sigmas of the mean (Mahalanobis) and returns at least `margin` beyond it, and the voxel lies
-//    at least `margin` off the surface the ray returned on (the plane of the return's voxel, or
-//    the horizontal plane through the return when that voxel has none): a far ring on the ground
-//    is on the ground plane of the return beyond it, a car's trail is not.
+//  - any voxel (a planar one only while young: the rays grazing a static edge pass through its
+//    ellipsoid): the ray passes within two sigmas of the mean (Mahalanobis) and returns at least
+//    `margin` beyond it, and the voxel lies at least `margin` off the surface the ray returned
+//    on: the plane of the return's voxel, else the normal of the range image at the return, else
+//    the horizontal plane through the return. A far ring on the ground lies on the ground the
+//    ray returned on; a car's trail does not.
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -41,6 +44,8 @@ struct CarvingStats {
 class FreeSpaceCarver {
 public:
     static constexpr int kMinPoints = 5;
+    /// Voxels hit by at most this many scans are tested beyond `range` too.
+    static constexpr int kYoungHits = 2;
 
     /// `margin` in metres (> 0); `min_scans` >= 1; voxels farther than `range` (metres, > 0)
     /// from a scan's viewpoint are not tested against it.
@@ -55,7 +60,8 @@ public:
     /// Scans counted so far.
     std::uint32_t scans() const { return scan_; }
     std::size_t memory_bytes() const {
-        return evidence_.capacity() * sizeof(Evidence) + (pixel_of_.capacity() + nearest_.capacity()) * sizeof(std::uint32_t) +
+        return evidence_.capacity() * sizeof(Evidence) + young_.capacity() * sizeof(VoxelKey) +
+               (pixel_of_.capacity() + nearest_.capacity() + young_slots_.capacity()) * sizeof(std::uint32_t) +
                (depth_.capacity() + elevation_.capacity() + range2_.capacity()) * sizeof(float);
     }
 
@@ -78,15 +84,21 @@ private:
         float mean[3] = {0, 0, 0};  // the voxel's mean (local frame), read without its statistics
     };
     void fit(const VoxelStats& stats, Evidence& e) const;
-    bool passes_through(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
-    bool off_surface(const VoxelGrid& grid, const Eigen::Vector3d& mu, const Eigen::Vector3d& p) const;
+    Eigen::Matrix3d covariance(const VoxelStats& stats, const Evidence& e) const;
+    bool crosses_plane(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
+    bool passes_near(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
+    bool off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, std::uint32_t pixel) const;
+    std::optional<Eigen::Vector3d> image_normal(std::span<const Eigen::Vector3d> points, std::uint32_t pixel) const;
 
     double margin_;
     int min_scans_;
     double range_;
     double sigma2_;  // sigma0^2, set from the grid's voxel size
     std::uint32_t scan_ = 0;
+    int rows_ = 0;  // rows of the range image of the scan being carved
     std::vector<Evidence> evidence_;  // per voxel of the grid, by its index
+    std::vector<VoxelKey> young_;            // the voxels hit by at most kYoungHits scans (keys: removals move indices)
+    std::vector<std::uint32_t> young_slots_;  // their indices in this scan
     // The range image, kept from scan to scan (no page faults for fresh buffers).
     std::vector<std::uint32_t> pixel_of_, nearest_;
     std::vector<float> depth_, elevation_, range2_;  // per pixel; per point (elevation, squared range)
