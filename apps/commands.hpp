@@ -63,7 +63,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);
 int run_fuse(const FuseOptions& o);
 
 struct MapBenchmarkOptions {
-    std::string dir, out, vdbfusion;
+    std::string dir, out, vdbfusion, fuse_options;
     std::string rows = "default,no-carving,paper";
     int frames = 0, gt_stride = 5, threads = 0;
     bool quiet = false;

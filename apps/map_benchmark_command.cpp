@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -41,6 +42,8 @@ CLI::App* add_map_benchmark_command(CLI::App& app, MapBenchmarkOptions& o) {
                   "Comma-separated rows: default, no-carving, paper, remesh-every-1, and with --vdbfusion: "
                   "vdbfusion-carving, vdbfusion, vdbfusion-kitti")
         ->capture_default_str();
+    c->add_option("--fuse-options", o.fuse_options,
+                  "More options for every lidarsurf row, as one string (an ablation: \"--truncation-voxels 1.5\")");
     c->add_option("--vdbfusion", o.vdbfusion, "VDBFusion peer program (make map-peers builds build-peers/lidarsurf_vdbfusion_peer)");
     c->add_option("--gt-stride", o.gt_stride, "Ground truth from every this-many-th GT scan")->capture_default_str();
     c->add_option("--max-distance", o.eval.max_distance, "Score only within this horizontal distance of the drive (metres)")->capture_default_str();
@@ -120,9 +123,12 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
     for (const std::string& name : split(o.rows)) {
         const std::string mesh = (out / "rows" / (name + ".ply")).string(), json = (out / "rows" / (name + ".json")).string();
         std::vector<std::string> fuse = {self, "fuse", seq.dir.string(), "-o", mesh, "--json", json, "--frames", n, "--threads", threads, "-q"};
+        std::istringstream more(o.fuse_options);
+        const std::vector<std::string> ablation{std::istream_iterator<std::string>(more), std::istream_iterator<std::string>()};
         auto with = [&](std::vector<std::string> extra) {
             std::vector<std::string> a = fuse;
             a.insert(a.end(), extra.begin(), extra.end());
+            a.insert(a.end(), ablation.begin(), ablation.end());
             return a;
         };
         auto peer = [&](std::vector<std::string> extra) {
@@ -145,6 +151,9 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
         else throw InvalidArgument("unknown row '" + name + "' (see --help)");
     }
     if (rows.empty()) throw InvalidArgument("--rows: no row");
+    if (!o.fuse_options.empty())
+        for (Row& r : rows)
+            if (!r.peer) r.label += " [" + o.fuse_options + "]";
 
     // 1. Fuse, each row in its own process.
     Progress progress("map-benchmark", "rows", rows.size() + 1, o.quiet);

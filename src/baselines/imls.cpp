@@ -161,7 +161,7 @@ Mesh reconstruct_imls(const PointCloud& cloud, const Eigen::Vector3d& sensor, co
         });
         const double truncation = truncation_distance_of(config.truncation_voxels, config.voxel_size);
         TsdfStats stats;
-        const TsdfField field = assemble_field(grid, candidates, samples, truncation, &stats);
+        const TsdfField field = assemble_field(grid, candidates, samples, Truncation{truncation}, &stats);
         sum.candidates = stats.candidates;
         sum.defined = stats.defined;
         sum.seconds_field = seconds_since(t0);

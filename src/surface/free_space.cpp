@@ -183,20 +183,6 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
             evidence_[v].hits = 1;
             refit.push_back(static_cast<std::uint32_t>(v));
         }
-    // The young voxels: those still young, then the new ones (a key removed and hit again is new).
-    std::size_t kept = 0;
-    young_slots_.clear();
-    for (const VoxelKey& key : young_) {
-        const std::int32_t* slot = grid.index().find(key);
-        if (!slot || *slot < 0 || static_cast<std::size_t>(*slot) >= before || evidence_[static_cast<std::size_t>(*slot)].hits > kYoungHits) continue;
-        young_slots_.push_back(static_cast<std::uint32_t>(*slot));
-        young_[kept++] = key;
-    }
-    young_.resize(kept);
-    for (std::size_t v = before; v < grid.size(); ++v) {
-        young_.push_back(grid.keys()[v]);
-        young_slots_.push_back(static_cast<std::uint32_t>(v));
-    }
     const std::vector<VoxelStats>& stats = grid.stats();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, refit.size(), 1024), [&](const auto& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) fit(stats[refit[i]], evidence_[refit[i]]);
@@ -300,6 +286,28 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     // 2b. Beyond the range, the young voxels only (at most kYoungHits scans hit them): a moving
     //     object seen from afar, once or twice, is tested by every later scan that can see
     //     through it, at the cost of a few voxels instead of every static surface in sight.
+    //     The list keeps those still young within the scan's reach (its farthest return), then
+    //     adds the new ones (a key removed and hit again is new): its length follows the area
+    //     around the drive, not the map. One left behind is tested within the range again if
+    //     a later pass comes back.
+    float farthest2 = 0;
+    for (float r2 : range2_) farthest2 = std::max(farthest2, r2);  // NaN (non-finite points) never wins
+    const double keep = std::sqrt(static_cast<double>(farthest2)) + alpha;
+    std::size_t kept = 0;
+    young_slots_.clear();
+    for (const VoxelKey& key : young_) {
+        const Eigen::Vector3d centre = (key.cast<double>() + Eigen::Vector3d::Constant(0.5)) * alpha;
+        if ((centre - s).squaredNorm() > keep * keep) continue;
+        const std::int32_t* slot = index.find(key);
+        if (!slot || *slot < 0 || static_cast<std::size_t>(*slot) >= before || evidence_[static_cast<std::size_t>(*slot)].hits > kYoungHits) continue;
+        young_slots_.push_back(static_cast<std::uint32_t>(*slot));
+        young_[kept++] = key;
+    }
+    young_.resize(kept);
+    for (std::size_t v = before; v < grid.size(); ++v) {
+        young_.push_back(grid.keys()[v]);
+        young_slots_.push_back(static_cast<std::uint32_t>(v));
+    }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, young_slots_.size(), 1024), [&](const auto& r) {
         std::vector<std::uint32_t>& mine = passed.local();
         std::size_t& tested = crossings.local();

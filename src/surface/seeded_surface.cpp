@@ -333,7 +333,7 @@ public:
         const ReconstructionConfig& config;
         Eigen::Vector3d sensor_local;
         EigenSolver solver;
-        double truncation;
+        Truncation truncation;
         EvaluatedStore& defined;
         std::atomic<std::size_t>& evaluated;  ///< vertices evaluated, defined or not
         const TsdfField* previous;            ///< values to reuse outside `dirty` (nullptr: none)
@@ -422,7 +422,7 @@ private:
             } else {
                 VertexSample sample = evaluate_vertex(window(Slots::block_of(v)), v, s_.config, s_.sensor_local, s_.solver);
                 ++evaluated_;
-                if (sample.defined && std::fabs(sample.tsdf) <= s_.truncation)  // truncation as assemble_field
+                if (s_.truncation.keeps(sample))  // as assemble_field
                     state = store(v, sample);
             }
             slot.store(state, std::memory_order_release);
@@ -555,7 +555,7 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     tbb::enumerable_thread_specific<NeighbourhoodWindow::ListArena> arenas;  // before `lists`: destroyed after it
     BlockLists lists;
     const PackedVoxels packed(grid, previous ? &dirty.eager_blocks : nullptr);
-    const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, config.truncation_distance(),
+    const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, truncation_of(config, grid),
                                          defined_vertices, evaluated, previous, dirty.vertex_blocks, reused, runs,
                                          lists, arenas};
     CubeSearch search(grid);

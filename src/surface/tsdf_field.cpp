@@ -61,17 +61,17 @@ TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config
     });
     // Truncation: a vertex farther than the truncation distance from its plane cannot be a corner
     // of a cube the surface crosses; it stays undefined so no cube is meshed from it.
-    return assemble_field(grid, candidates, samples, config.truncation_distance(), stats);
+    return assemble_field(grid, candidates, samples, truncation_of(config, grid), stats);
 }
 
 TsdfField assemble_field(const VoxelGrid& grid, const std::vector<VoxelKey>& candidates,
-                         const std::vector<VertexSample>& samples, double truncation, TsdfStats* stats) {
+                         const std::vector<VertexSample>& samples, const Truncation& truncation, TsdfStats* stats) {
     TsdfField field;
     field.voxel_size = grid.voxel_size();
     field.origin = grid.origin();
     std::size_t defined = 0;
     for (std::size_t i = 0; i < candidates.size(); ++i)
-        if (samples[i].defined && std::fabs(samples[i].tsdf) <= truncation) {
+        if (truncation.keeps(samples[i])) {
             field.insert(candidates[i], samples[i]);
             ++defined;
         }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <map>
 #include <set>
 #include <span>
 #include <tuple>
@@ -215,6 +216,38 @@ TEST(SeededSurface, DataOnALatticePlaneIsStillMeshed) {
     ASSERT_GT(m.fast.triangles.size(), 100u);
     expect_same_mesh(m.fast, m.reference, "lattice plane");
     for (const auto& v : m.fast.vertices) EXPECT_NEAR(v.z(), -1.0, 1e-6);
+}
+
+// A plane across the lattice (normal (1, 1, 1) / sqrt(3)) fused from two viewpoints: a cube it
+// crosses near a corner has its farthest corner up to sqrt(3) voxels from it, so the truncation
+// along the normal keeps every such corner and the patch comes out whole: no hole inside it, every
+// vertex on the plane.
+TEST(SeededSurface, AnObliquePlaneFusedFromTwoViewpointsHasNoHoles) {
+    const Eigen::Vector3d n = Eigen::Vector3d::Ones().normalized();
+    const Eigen::Vector3d u = Eigen::Vector3d(1, -1, 0).normalized(), w = n.cross(u);
+    const Eigen::Vector3d centre(0.37, 0.21, 0.13);  // off the lattice
+    ReconstructionConfig c;
+    Reconstructor rec(c, centre + 6 * n);
+    for (int view = 0; view < 2; ++view) {
+        std::vector<Eigen::Vector3d> points;
+        for (int i = -40; i <= 40; ++i)
+            for (int j = -40; j <= 40; ++j)
+                if ((i + j + view) % 2 == 0) points.push_back(centre + 0.05 * i * u + 0.05 * j * w);
+        rec.integrate(points, centre + 6 * n + (view == 0 ? 3.0 : -3.0) * u);
+    }
+    const Mesh mesh = rec.extract_mesh();
+    ASSERT_GT(mesh.triangles.size(), 500u);
+    for (const Eigen::Vector3d& v : mesh.vertices) EXPECT_NEAR(n.dot(v - centre), 0.0, 0.02);
+    // Boundary edges only along the patch's border (2 m from its centre in the plane).
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+    for (const auto& t : mesh.triangles)
+        for (int i = 0; i < 3; ++i) ++edges[{std::min(t[i], t[(i + 1) % 3]), std::max(t[i], t[(i + 1) % 3])}];
+    std::size_t inside = 0;
+    for (const auto& [e, count] : edges) {
+        const Eigen::Vector3d mid = 0.5 * (mesh.vertices[e.first] + mesh.vertices[e.second]) - centre;
+        if (count == 1 && std::max(std::fabs(u.dot(mid)), std::fabs(w.dot(mid))) < 2.0 - 3 * c.voxel_size) ++inside;
+    }
+    EXPECT_EQ(inside, 0u);
 }
 
 // The seed wave evaluates each seed cube's all-even corner first and the other corners only for

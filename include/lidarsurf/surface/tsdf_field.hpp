@@ -115,10 +115,10 @@ struct TsdfStats {
     std::size_t defined = 0;     ///< vertices that received a TSDF value within the truncation
 };
 
-/// Builds the field from evaluated candidates: keeps the defined samples with |tsdf| <= truncation
-/// (metres; infinity keeps all). Shared by every method that produces a TSDF on the lattice.
+/// Builds the field from evaluated candidates: keeps the samples the truncation keeps (distance
+/// infinity keeps every defined one). Shared by every method that produces a TSDF on the lattice.
 TsdfField assemble_field(const VoxelGrid& grid, const std::vector<VoxelKey>& candidates,
-                         const std::vector<VertexSample>& samples, double truncation, TsdfStats* stats = nullptr);
+                         const std::vector<VertexSample>& samples, const Truncation& truncation, TsdfStats* stats = nullptr);
 
 /// Evaluates every candidate vertex (in parallel) and keeps the defined ones.
 TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config,

@@ -1,7 +1,9 @@
 #pragma once
 // Per-vertex choice of the neighbourhood level k' (Sec. III-C1 and the modes of Sec. IV-B) and
 // the TSDF value of Eq. (4). This is the straightforward reference evaluation of one vertex.
+#include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -19,6 +21,27 @@ struct VertexSample {
     float confidence = 0;    ///< N_PDF at w^{k'} (Eq. 3), also computed for the non-GC modes.
     Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< n^{k'}.
 };
+
+/// Truncation (docs/method.md, "Truncation"): which evaluated samples define the field.
+struct Truncation {
+    double distance = std::numeric_limits<double>::infinity();  ///< metres from the sample's plane
+    /// Scale the distance by the L1 norm of the unit normal: a cube's extent along n is
+    /// alpha * |n|_1 (1 for a plane along the lattice, up to sqrt(3) across it), so every corner
+    /// of a cube the plane crosses is kept whatever the plane's orientation. Used on grids with
+    /// viewpoints (fused sequences), where oblique surfaces seen from all sides (crowns, wall
+    /// tops) lost those corners; a single scan keeps the lattice distance.
+    bool along_normal = false;
+
+    bool keeps(const VertexSample& s) const {
+        if (!s.defined) return false;
+        const double limit = along_normal ? distance * static_cast<double>(s.normal.cwiseAbs().sum()) : distance;
+        return std::fabs(s.tsdf) <= limit;
+    }
+};
+/// The truncation of a reconstruction: `config`'s distance, along the normal on a grid with viewpoints.
+inline Truncation truncation_of(const ReconstructionConfig& config, const VoxelGrid& grid) {
+    return {config.truncation_distance(), grid.has_viewpoints()};
+}
 
 /// The position v's normal is oriented toward (Eq. 2) and its radial slabs are measured from:
 /// `sensor_local` (the sensor, local frame), or on a grid with viewpoints (several sensor
