@@ -119,12 +119,12 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
     // The rows, as command lines.
     const std::string self = fs::read_symlink("/proc/self/exe").string();
     const std::string n = std::to_string(frames), threads = std::to_string(o.threads);
+    std::istringstream more(o.fuse_options);
+    const std::vector<std::string> ablation{std::istream_iterator<std::string>(more), std::istream_iterator<std::string>()};
     std::vector<Row> rows;
     for (const std::string& name : split(o.rows)) {
         const std::string mesh = (out / "rows" / (name + ".ply")).string(), json = (out / "rows" / (name + ".json")).string();
         std::vector<std::string> fuse = {self, "fuse", seq.dir.string(), "-o", mesh, "--json", json, "--frames", n, "--threads", threads, "-q"};
-        std::istringstream more(o.fuse_options);
-        const std::vector<std::string> ablation{std::istream_iterator<std::string>(more), std::istream_iterator<std::string>()};
         auto with = [&](std::vector<std::string> extra) {
             std::vector<std::string> a = fuse;
             a.insert(a.end(), extra.begin(), extra.end());

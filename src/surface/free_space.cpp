@@ -143,12 +143,12 @@ std::optional<Eigen::Vector3d> FreeSpaceCarver::image_normal(std::span<const Eig
     return n / norm;
 }
 
-bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, std::uint32_t q) const {
+bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu,
+                                  const Eigen::Vector3d& p, std::uint32_t q) const {
     // The surface the ray returned on: the plane of the return's voxel when it has one, else the
     // normal of the range image at the return, else the horizontal plane (z up) through the
     // return. A voxel on it (the ground beyond a grazing ray's return, seen before by a ring) is
     // not seen through; the rear of a car that drove on, a vertical surface, is.
-    const Eigen::Vector3d p = grid.to_local(points[nearest_[q]]);
     Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
     const std::int32_t* slot = grid.index().find(grid.key_of_local(p));
     if (slot && *slot >= 0 && evidence_[static_cast<std::size_t>(*slot)].shape == Shape::Planar) {
@@ -259,7 +259,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
             const Eigen::Vector3d p = grid.to_local(points[nearest[static_cast<std::size_t>(q)]]);
             if ((e.shape == Shape::Planar && crosses_plane(st, e, s, p)) ||
                 ((e.shape != Shape::Planar || e.hits <= kYoungHits) && passes_near(st, e, s, p) &&
-                 off_surface(grid, points, st.mean, static_cast<std::uint32_t>(q)))) {
+                 off_surface(grid, points, st.mean, p, static_cast<std::uint32_t>(q)))) {
                 e.last_pass = stamp;
                 mine.push_back(v);
                 return;

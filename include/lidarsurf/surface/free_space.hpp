@@ -87,7 +87,9 @@ private:
     Eigen::Matrix3d covariance(const VoxelStats& stats, const Evidence& e) const;
     bool crosses_plane(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
     bool passes_near(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
-    bool off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, std::uint32_t pixel) const;
+    /// `p`: the return of `pixel`, local frame.
+    bool off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, const Eigen::Vector3d& p,
+                     std::uint32_t pixel) const;
     std::optional<Eigen::Vector3d> image_normal(std::span<const Eigen::Vector3d> points, std::uint32_t pixel) const;
 
     double margin_;
