@@ -2,6 +2,7 @@
 // exit codes: 0 success, 1 internal error, 2 bad arguments, 3 bad input data, 4 file system error,
 // 5 over the memory budget (--max-memory-mb).
 #include <cctype>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +25,7 @@
 #include "lidarsurf/eval/holdout.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/eval/report.hpp"
+#include "lidarsurf/eval/ring_holdout.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
@@ -67,8 +69,12 @@ struct EvaluateOptions {
     std::string json, mesh_out, gt_format = "auto";
     int gt_bin_fields = 4;
     double holdout = 0, gt_spacing = 0.02;
+    bool holdout_rings = false;
+    std::string ring_field = "auto";
     std::uint64_t seed = 1;
     EvaluationConfig eval;
+    RingHoldoutConfig rings;
+    bool max_range_given = false;
     bool json_given = false, mesh_out_given = false;  // an option given with an empty name is an error
 };
 
@@ -90,6 +96,44 @@ std::vector<Eigen::Vector3d> read_ground_truth(const std::string& path, const Ev
     return std::move(cloud.points);
 }
 
+// --ring-field: "auto" (the fifth value of 5-value .bin records, where nuScenes stores the ring;
+// the point order otherwise), "order", or the index of the value in .bin records.
+int ring_field_of(const std::string& name, const std::string& path, const PointReadOptions& read) {
+    if (name == "order") return -1;
+    if (name == "auto") {
+        const bool bin = read.format == PointFormat::KittiBin || (read.format == PointFormat::Auto && extension_of(path) == ".bin");
+        return bin && read.bin_fields == 5 ? 4 : -1;
+    }
+    int index = -1;
+    const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), index);
+    if (ec != std::errc{} || end != name.data() + name.size())
+        throw InvalidArgument("--ring-field must be auto, order or the index of a .bin value (got '" + name + "')");
+    return index;
+}
+
+// The ring hold-out (eval/ring_holdout.hpp): the even rings are reconstructed with the
+// reconstruct options, the odd rings within --max-range (default 30 m) are measured.
+int run_ring_holdout(EvaluateOptions& o, const ReconstructOptions& ro) {
+    if (o.inputs.size() != 1) throw InvalidArgument("evaluate --holdout-rings takes one scan (got " + std::to_string(o.inputs.size()) + " inputs)");
+    Method m = resolve_method(ro);
+    RingHoldoutConfig& rc = o.rings;
+    rc.origin = m.sensor;
+    rc.threads = m.config.threads;
+    if (o.max_range_given) rc.max_range = o.eval.max_range;
+    rc.validate();
+    m.read.ring_field = ring_field_of(o.ring_field, o.inputs[0], m.read);
+    PointCloud cloud = read_points(o.inputs[0], m.read);
+    const std::size_t dropped = drop_non_finite(cloud);
+    std::string summary;
+    const RingHoldoutResult r = ring_holdout(cloud, [&](const PointCloud& even) { return run_method(m, even, summary); }, rc);
+    std::printf("%s: %s; ring hold-out: %zu rings (%s), %zu points of even rings reconstructed, %zu of odd rings held out, "
+                "%zu non-finite dropped\n  %s\n  mesh: %zu triangles\n%s",
+                o.inputs[0].c_str(), method_name(m).c_str(), r.rings, m.read.ring_field >= 0 ? "ring field" : "point order", r.reconstructed,
+                r.held_out, dropped, summary.c_str(), r.mesh_triangles, format_table(r).c_str());
+    if (o.json_given) write_text(o.json, to_json(r));
+    return 0;
+}
+
 int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     EvaluationConfig& ec = o.eval;
     ec.seed = o.seed;
@@ -100,6 +144,11 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     if (o.mesh_out_given) files.output(o.mesh_out, "--mesh-out");
     files.check();
     if (o.mesh_out_given) mesh_format_for(o.mesh_out);  // an unknown extension: exit 2 now
+    if (o.holdout_rings) {
+        if (o.holdout != 0) throw InvalidArgument("give --holdout or --holdout-rings, not both");
+        if (o.mesh_out_given) throw InvalidArgument("--mesh-out is for --holdout");
+        return run_ring_holdout(o, ro);
+    }
     Mesh mesh;
     std::vector<Eigen::Vector3d> gt;
     std::string header;
@@ -193,12 +242,24 @@ int main(int argc, char** argv) {
         "  lidarsurf evaluate mesh.ply gt.bin --origin 0,0,0 --max-range 50 --json metrics.json\n"
         "  lidarsurf evaluate mesh.ply scene.obj          (a ground-truth mesh is sampled)\n"
         "  lidarsurf evaluate --holdout 0.5 000000.bin --seed 7 --method imls\n"
+        "  lidarsurf evaluate --holdout-rings 000000.bin\n"
+        "  lidarsurf evaluate --holdout-rings sweep.bin --bin-fields 5       (nuScenes: the 5th value is the ring)\n"
         "With --holdout the scan is split at random, one part is reconstructed with the reconstruct\n"
-        "options and the held-out part is the ground truth (docs/evaluation.md).\n");
-    ev->add_option("inputs", eo.inputs, "MESH GT, or SCAN with --holdout")->required()->expected(1, 2);
+        "options and the held-out part is the ground truth. With --holdout-rings the even rings are\n"
+        "reconstructed and the odd-ring points within --max-range (default 30 m) are measured against\n"
+        "the mesh (docs/evaluation.md).\n");
+    ev->add_option("inputs", eo.inputs, "MESH GT, or SCAN with --holdout or --holdout-rings")->required()->expected(1, 2);
     ev->add_option("--holdout", eo.holdout, "Hold out this fraction of SCAN as ground truth, in (0, 1)");
+    ev->add_flag("--holdout-rings", eo.holdout_rings, "Reconstruct SCAN's even rings, measure its odd-ring points against the mesh");
+    ev->add_option("--ring-field", eo.ring_field,
+                   "With --holdout-rings: where the rings come from: auto (the 5th value of --bin-fields 5 records, else the "
+                   "point order), order (a ring ends where the azimuth restarts, KITTI), or the index of the .bin value")
+        ->capture_default_str();
+    ev->add_option("--range-bin", eo.rings.range_bin, "With --holdout-rings: width of the range bins, metres")->capture_default_str();
     ev->add_option("--seed", eo.seed, "Seed of the hold-out split and of the surface sampling")->capture_default_str();
-    ev->add_option("--max-range", eo.eval.max_range, "Evaluate only within this range of --origin (0 = all)")->capture_default_str();
+    ev->add_option("--max-range", eo.eval.max_range, "Evaluate only within this range of --origin (0 = all; --holdout-rings: 30)")
+        ->capture_default_str()
+        ->each([&eo](const std::string&) { eo.max_range_given = true; });
     ev->add_option("--threshold", eo.eval.threshold, "Precision/recall/F-score threshold, metres")->capture_default_str();
     ev->add_option("--delta", eo.eval.delta, "Report the share of vertices within delta of GT (Fig. 6b)")->capture_default_str();
     ev->add_option("--sample-spacing", eo.eval.sample_spacing, "Mean spacing of the points sampled on the mesh, metres")->capture_default_str();

@@ -85,4 +85,47 @@ std::string to_json(const EvaluationResult& r) {
     return o.str();
 }
 
+namespace {
+std::string ring_row(const char* label, const HoldoutDistances& h) {
+    char buf[256];
+    std::string row;
+    std::snprintf(buf, sizeof buf, "  %-10s %8zu", label, h.count);
+    row += buf;
+    for (double w : h.within) {
+        std::snprintf(buf, sizeof buf, "  %7.1f%%", 100 * w);
+        row += buf;
+    }
+    std::snprintf(buf, sizeof buf, "  %7.4f  %7.4f  %7.4f\n", h.mean, h.median, h.p90);
+    return row + buf;
+}
+
+std::string holdout_json(const HoldoutDistances& h) {
+    return "{\"lo\": " + num(h.lo) + ", \"hi\": " + num(h.hi) + ", \"count\": " + std::to_string(h.count) +
+           ", \"within\": " + array_json(h.within, num) + ", \"mean\": " + num(h.mean) + ", \"median\": " + num(h.median) +
+           ", \"p90\": " + num(h.p90) + "}";
+}
+}  // namespace
+
+std::string format_table(const RingHoldoutResult& r) {
+    char buf[64];
+    std::string out = "odd-ring points to the mesh of the even rings (metres):\n  range        points";
+    for (double t : r.thresholds) {
+        std::snprintf(buf, sizeof buf, "  <=%5.3g m", t);
+        out += buf;
+    }
+    out += "     mean   median      p90\n";
+    for (const HoldoutDistances& b : r.by_range) {
+        std::snprintf(buf, sizeof buf, "%g-%g m", b.lo, b.hi);
+        out += ring_row(buf, b);
+    }
+    return out + ring_row("all", r.all);
+}
+
+std::string to_json(const RingHoldoutResult& r) {
+    return "{\"ring_holdout\": {\"rings\": " + std::to_string(r.rings) + ", \"reconstructed\": " + std::to_string(r.reconstructed) +
+           ", \"held_out\": " + std::to_string(r.held_out) + ", \"mesh_triangles\": " + std::to_string(r.mesh_triangles) +
+           ", \"thresholds\": " + array_json(r.thresholds, num) + ", \"all\": " + holdout_json(r.all) +
+           ", \"by_range\": " + array_json(r.by_range, holdout_json) + "}}\n";
+}
+
 }  // namespace lidarsurf

@@ -11,12 +11,24 @@
 
 #include "byte_reader.hpp"
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/format_value.hpp"
 #include "ply_format.hpp"
 
 namespace lidarsurf {
 
 std::size_t drop_non_finite(PointCloud& cloud) {
     const std::size_t before = cloud.points.size();
+    if (cloud.rings.size() == before) {
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < before; ++i) {
+            if (!cloud.points[i].allFinite()) continue;
+            cloud.points[kept] = cloud.points[i];
+            cloud.rings[kept++] = cloud.rings[i];
+        }
+        cloud.points.resize(kept);
+        cloud.rings.resize(kept);
+        return before - kept;
+    }
     std::erase_if(cloud.points, [](const Eigen::Vector3d& p) { return !p.allFinite(); });
     return before - cloud.points.size();
 }
@@ -74,8 +86,11 @@ PointFormat parse_point_format(std::string_view name) {
     throw InvalidArgument("unknown point format '" + std::string(name) + "' (expected auto, bin, ply, pcd, xyz, csv)");
 }
 
-PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name) {
+PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name, int ring_field) {
     if (fields < 3 || fields > 64) throw InvalidArgument("bin fields per point must be in [3, 64]");
+    if (ring_field != -1 && (ring_field < 3 || ring_field >= fields))
+        throw InvalidArgument("the ring field must be one of the values after x, y, z: in [3, " + std::to_string(fields - 1) + "] for " +
+                              std::to_string(fields) + " float32 per point (got " + std::to_string(ring_field) + ")");
     if (data.empty()) throw FormatError(name + ": file is empty");
     const std::size_t record = 4 * static_cast<std::size_t>(fields);
     if (data.size() % record != 0)
@@ -87,6 +102,16 @@ PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string&
     for (std::size_t i = 0; i < n; ++i) {
         const char* p = data.data() + i * record;
         cloud.points[i] = {load<float>(p, false), load<float>(p + 4, false), load<float>(p + 8, false)};
+    }
+    if (ring_field >= 0) {
+        cloud.rings.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const float r = load<float>(data.data() + i * record + 4 * static_cast<std::size_t>(ring_field), false);
+            if (!(r >= 0 && r <= 4095 && r == std::floor(r)))
+                throw FormatError(name + ": point " + std::to_string(i) + " has ring " + format_value(static_cast<double>(r)) +
+                                  " in field " + std::to_string(ring_field) + "; rings are whole numbers in [0, 4095]");
+            cloud.rings[i] = static_cast<std::uint16_t>(r);
+        }
     }
     return cloud;
 }
@@ -346,9 +371,11 @@ PointCloud read_points(const std::filesystem::path& path, const PointReadOptions
         else throw InvalidArgument(path.string() + ": cannot tell the format from the extension '" + ext + "' (use --format bin|ply|pcd|xyz)");
     }
     const std::string name = path.string();
+    if (options.ring_field != -1 && fmt != PointFormat::KittiBin)
+        throw InvalidArgument(name + ": a ring field is read from .bin scans only");
     const std::string data = read_file(name, options.max_bytes);
     switch (fmt) {
-        case PointFormat::KittiBin: return parse_kitti_bin(data, options.bin_fields, name);
+        case PointFormat::KittiBin: return parse_kitti_bin(data, options.bin_fields, name, options.ring_field);
         case PointFormat::Ply: return parse_ply_points(data, name);
         case PointFormat::Pcd: return parse_pcd_points(data, name);
         default: return parse_text_points(data, name);

@@ -38,6 +38,28 @@ expect 0 "F-score" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --json "$dir
 grep -q '"ae_sym"' "$dir/m.json" || { echo "FAIL: evaluate --json wrote no metrics"; fail=$((fail + 1)); }
 expect 0 "hold-out 0.5.*held out" -- "$cli" evaluate --holdout 0.5 "$dir/scan.bin" --seed 3 --mesh-out "$dir/ho.ply"
 [ -s "$dir/ho.ply" ] || { echo "FAIL: --mesh-out not written"; fail=$((fail + 1)); }
+# The ring hold-out: the simulator writes column after column, so the scan is stored again ring
+# after ring (as KITTI does), and once more with each point's ring as a fifth value (as nuScenes does).
+python3 - "$dir/scan.bin" "$dir/rings.bin" "$dir/rings5.bin" <<'PY'
+import math, struct, sys
+data = open(sys.argv[1], "rb").read()
+pts = [struct.unpack_from("<4f", data, i) for i in range(0, len(data), 16)]
+beams = [2.0 + (-24.8 - 2.0) * i / 63 for i in range(64)]  # the hdl64 preset
+def beam(p):
+    el = math.degrees(math.atan2(p[2], math.hypot(p[0], p[1])))
+    return min(range(64), key=lambda b: abs(beams[b] - el))
+rows = sorted(((beam(p), math.atan2(p[1], p[0]) % (2 * math.pi), p) for p in pts), key=lambda r: (r[0], r[1]))
+open(sys.argv[2], "wb").write(b"".join(struct.pack("<4f", *p) for _, _, p in rows))
+open(sys.argv[3], "wb").write(b"".join(struct.pack("<5f", *p, b) for b, _, p in rows))
+PY
+expect 0 "64 rings \(point order\).*held out" -- "$cli" evaluate --holdout-rings "$dir/rings.bin" --json "$dir/rings.json"
+grep -q '"ring_holdout": {"rings": 64' "$dir/rings.json" || { echo "FAIL: evaluate --holdout-rings --json"; fail=$((fail + 1)); }
+expect 0 "64 rings \(ring field\)" -- "$cli" evaluate --holdout-rings "$dir/rings5.bin" --bin-fields 5
+expect 0 "64 rings \(point order\)" -- "$cli" evaluate --holdout-rings "$dir/rings5.bin" --bin-fields 5 --ring-field order
+expect 3 "not stored ring after ring" -- "$cli" evaluate --holdout-rings "$dir/scan.bin"
+expect 2 "ring field must be" -- "$cli" evaluate --holdout-rings "$dir/rings5.bin" --bin-fields 5 --ring-field 5
+expect 2 "auto, order" -- "$cli" evaluate --holdout-rings "$dir/rings.bin" --ring-field top
+expect 2 "not both" -- "$cli" evaluate --holdout-rings --holdout 0.5 "$dir/rings.bin"
 expect 2 "takes MESH GT" -- "$cli" evaluate "$dir/mesh.ply"
 expect 2 "one scan" -- "$cli" evaluate --holdout 0.5 "$dir/scan.bin" "$dir/gt.bin"
 expect 2 "fraction" -- "$cli" evaluate --holdout 1.5 "$dir/scan.bin"

@@ -18,6 +18,9 @@ PointFormat parse_point_format(std::string_view name);
 struct PointReadOptions {
     PointFormat format = PointFormat::Auto;  ///< Auto: chosen by the file extension.
     int bin_fields = 4;  ///< float32 values per point in .bin files (KITTI: 4, nuScenes: 5).
+    /// Index of the float32 that holds the ring number in .bin records (nuScenes: 4), read into
+    /// PointCloud::rings; -1: none. Ring values must be whole numbers in [0, 4095].
+    int ring_field = -1;
     /// The most bytes the file may hold (0 = no limit): a larger file, or a stream (a pipe, a
     /// device) that runs past it, throws ResourceLimit instead of being read on without end.
     std::size_t max_bytes = 0;
@@ -27,7 +30,7 @@ struct PointReadOptions {
 PointCloud read_points(const std::filesystem::path& path, const PointReadOptions& options = {});
 
 /// Parsers on an in-memory buffer (used by read_points and by the fuzzers). `name` is for messages.
-PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name);
+PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name, int ring_field = -1);
 PointCloud parse_ply_points(std::string_view data, const std::string& name);
 PointCloud parse_pcd_points(std::string_view data, const std::string& name);
 PointCloud parse_text_points(std::string_view data, const std::string& name);
