@@ -10,11 +10,13 @@ numpy in, numpy out; the same Config as the C++ library and the CLI.
 import json as _json
 
 from ._lidarsurf import (Config, Mesh, Reconstructor, __version__, points_view, read_mesh, read_points,
-                         read_poses, reconstruct, set_simd_level, simd_level, simd_levels, simulate)
-from ._lidarsurf import _evaluate_json
+                         read_poses, read_rings, reconstruct, rings_from_order, set_simd_level, simd_level,
+                         simd_levels, simulate)
+from ._lidarsurf import _evaluate_json, _ring_holdout_json
 
-__all__ = ["Config", "Mesh", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "evaluate", "simulate", "points_view",
-           "simd_level", "simd_levels", "set_simd_level", "__version__"]
+__all__ = ["Config", "Mesh", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "read_rings", "evaluate",
+           "ring_holdout", "rings_from_order", "simulate", "points_view", "simd_level", "simd_levels", "set_simd_level",
+           "__version__"]
 
 
 def evaluate(mesh, gt_points, origin=(0.0, 0.0, 0.0), max_range=0.0, threshold=0.1, delta=0.2, seed=1):
@@ -26,3 +28,15 @@ def evaluate(mesh, gt_points, origin=(0.0, 0.0, 0.0), max_range=0.0, threshold=0
     """
     return _json.loads(_evaluate_json(mesh, gt_points, list(origin), float(max_range), float(threshold),
                                       float(delta), int(seed)))
+
+
+def ring_holdout(points, rings=None, origin=(0.0, 0.0, 0.0), config=None, method=None, max_range=30.0, range_bin=10.0):
+    """The ring hold-out of a scan, as a dict: the even rings are meshed (with `config` and `method`, as
+    reconstruct() takes them) and the odd-ring points within `max_range` of `origin` are measured against
+    the mesh: 'all' and 'by_range' (bins of `range_bin` metres) give the count, the shares 'within' 0.05
+    and 0.1 m, 'mean', 'median' and 'p90' (metres), as `lidarsurf evaluate --holdout-rings --json` writes
+    them (docs/evaluation.md). `rings`: one ring number per point (read_rings), or None for a scan stored
+    ring after ring (rings_from_order).
+    """
+    return _json.loads(_ring_holdout_json(points, rings, list(origin), config, method, float(max_range),
+                                          float(range_bin)))["ring_holdout"]

@@ -16,6 +16,7 @@
 #include "lidarsurf/core/simd.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/eval/report.hpp"
+#include "lidarsurf/eval/ring_holdout.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
@@ -90,23 +91,58 @@ py::array_t<double> points_to_numpy(std::vector<Eigen::Vector3d>&& pts) {
                                reinterpret_cast<const double*>(owned->data()), free_when_done);
 }
 
-Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin, std::optional<ReconstructionConfig> config,
-                    std::optional<std::string> method) {
+// The method `reconstruct` and `ring_holdout` run: config (or the defaults) and the method's name
+// as the CLI's --method takes it, validated.
+MethodConfig method_of(std::optional<ReconstructionConfig> config, const std::optional<std::string>& method) {
     MethodConfig m;
     m.config = config.value_or(ReconstructionConfig{});
-    const PointArray view = points_view(points, "points");
-    const Eigen::Vector3d sensor = as_vec3(origin, "origin");
     m.imls = method && *method == "imls";
     if (method && *method == "paper") m.config.make_paper_literal();  // the paper as written, in config's mode
     else if (method && !m.imls && *method != "default") m.config.mode = parse_mode(*method);  // InvalidArgument names the choices
     m.config.validate();
     m.imls_config = ImlsConfig::matching(m.config);
     m.validate();
+    return m;
+}
+
+Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin, std::optional<ReconstructionConfig> config,
+                    std::optional<std::string> method) {
+    const PointArray view = points_view(points, "points");
+    const Eigen::Vector3d sensor = as_vec3(origin, "origin");
+    const MethodConfig m = method_of(std::move(config), method);
     py::gil_scoped_release release;
     return reconstruct_with(m, as_span(view), sensor);  // the array read in place
 }
 
+// Ring numbers from Python: None, or a 1-D array of whole numbers in [0, 4095], one per point.
+std::vector<std::uint16_t> rings_of(const py::handle& rings, std::size_t points) {
+    if (rings.is_none()) return {};
+    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(rings);
+    if (!a || a.ndim() != 1) throw InvalidArgument("rings must be a 1-D array of ring numbers");
+    if (static_cast<std::size_t>(a.shape(0)) != points)
+        throw InvalidArgument("rings has " + std::to_string(a.shape(0)) + " entries for " + std::to_string(points) + " points");
+    std::vector<std::uint16_t> out(points);
+    for (std::size_t i = 0; i < points; ++i) {
+        const double r = a.data()[i];
+        if (!(r >= 0 && r <= 4095 && r == std::floor(r))) throw InvalidArgument("rings must be whole numbers in [0, 4095]");
+        out[i] = static_cast<std::uint16_t>(r);
+    }
+    return out;
+}
 
+PointCloud cloud_of(const py::handle& points) {
+    const PointArray view = points_view(points, "points");
+    const auto span = as_span(view);
+    PointCloud cloud;
+    cloud.points.assign(span.begin(), span.end());
+    return cloud;
+}
+
+py::array_t<std::uint16_t> rings_to_numpy(const std::vector<std::uint16_t>& rings) {
+    py::array_t<std::uint16_t> out(static_cast<py::ssize_t>(rings.size()));
+    std::copy(rings.begin(), rings.end(), out.mutable_data());
+    return out;
+}
 
 // A Reconstructor shared between Python threads: one call at a time (the C++ object is not
 // thread-safe). The GIL is released before the lock is taken, so a long extraction in one thread
@@ -368,6 +404,57 @@ PYBIND11_MODULE(_lidarsurf, m) {
         },
         py::arg("path"), py::arg("format") = "auto", py::arg("bin_fields") = 4,
         "Read a point cloud (KITTI .bin, .ply, .pcd, .xyz/.csv/.txt) as an (N, 3) float64 array. Non-finite points are kept.");
+
+    m.def(
+        "read_rings",
+        [](const std::string& path, int ring_field, int bin_fields) {
+            PointReadOptions o;
+            o.format = PointFormat::KittiBin;
+            o.bin_fields = bin_fields;
+            o.ring_field = ring_field;
+            PointCloud cloud;
+            {
+                py::gil_scoped_release release;
+                cloud = read_points(path, o);
+            }
+            return rings_to_numpy(cloud.rings);
+        },
+        py::arg("path"), py::arg("ring_field") = 4, py::arg("bin_fields") = 5,
+        "The ring of every point of a .bin scan that stores it, as a uint16 array in the order of read_points: value\n"
+        "`ring_field` of records of `bin_fields` float32 (nuScenes: 4 of 5). ValueError for a value that is not a whole\n"
+        "number in [0, 4095].");
+    m.def(
+        "rings_from_order",
+        [](const py::handle& points) {
+            const PointCloud cloud = cloud_of(points);
+            std::vector<std::uint16_t> rings;
+            {
+                py::gil_scoped_release release;
+                rings = rings_from_order(cloud);
+            }
+            return rings_to_numpy(rings);
+        },
+        py::arg("points"),
+        "The ring of every point of a scan stored ring after ring (KITTI's HDL-64E order), from the point order: a ring\n"
+        "ends where the azimuth passes the last point's again or turns back by more than 20 degrees. uint16 array,\n"
+        "rings numbered 0, 1, ... in order. ValueError for a scan not stored that way.");
+    m.def(
+        "_ring_holdout_json",
+        [](const py::handle& points, const py::handle& rings, const std::vector<double>& origin, std::optional<ReconstructionConfig> config,
+           std::optional<std::string> method, double max_range, double range_bin) {
+            PointCloud cloud = cloud_of(points);
+            cloud.rings = rings_of(rings, cloud.points.size());
+            RingHoldoutConfig c;
+            c.origin = as_vec3(origin, "origin");
+            c.max_range = max_range;
+            c.range_bin = range_bin;
+            const MethodConfig chosen = method_of(std::move(config), method);
+            c.threads = chosen.config.threads;
+            py::gil_scoped_release release;
+            return to_json(ring_holdout(cloud, [&](const PointCloud& even) { return reconstruct_with(chosen, even, c.origin); }, c));
+        },
+        py::arg("points"), py::arg("rings"), py::arg("origin"), py::arg("config"), py::arg("method"), py::arg("max_range"),
+        py::arg("range_bin"), "The ring hold-out as JSON text (use lidarsurf.ring_holdout).");
 
     m.def(
         "read_mesh",

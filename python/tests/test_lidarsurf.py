@@ -254,6 +254,39 @@ def test_evaluate_returns_the_metrics(scan):
         lidarsurf.Mesh(verts, np.array([[0, 1, 500]]))
 
 
+def test_ring_holdout_on_a_scan_stored_ring_after_ring(scan, tmp_path):
+    # The simulator writes column after column; each point's beam follows from its elevation (the
+    # hdl64 preset: 64 beams evenly from +2 to -24.8 degrees), so the scan can be stored ring after
+    # ring, as KITTI stores it, with the rings known.
+    beams = np.linspace(2.0, -24.8, 64)
+    elevation = np.degrees(np.arctan2(scan[:, 2], np.hypot(scan[:, 0], scan[:, 1])))
+    beam = np.abs(elevation[:, None] - beams[None, :]).argmin(axis=1)
+    azimuth = np.arctan2(scan[:, 1], scan[:, 0]) % (2 * np.pi)
+    order = np.lexsort((azimuth, beam))
+    ordered, beam = scan[order], beam[order]
+    rings = lidarsurf.rings_from_order(ordered)
+    assert rings.dtype == np.uint16
+    np.testing.assert_array_equal(rings, beam)  # every beam hits the demo world: ring = beam
+    with pytest.raises(ValueError, match="ring after ring"):
+        lidarsurf.rings_from_order(scan)
+    by_order = lidarsurf.ring_holdout(ordered)
+    given = lidarsurf.ring_holdout(ordered, rings=beam)
+    assert by_order == given
+    assert by_order["rings"] == 64 and by_order["reconstructed"] == int((beam % 2 == 0).sum())
+    held = ordered[beam % 2 == 1]
+    assert by_order["all"]["count"] == int((np.linalg.norm(held, axis=1) <= 30).sum())
+    assert [b["hi"] for b in by_order["by_range"]] == [10, 20, 30]
+    assert 0.5 < by_order["all"]["within"][0] <= by_order["all"]["within"][1] <= 1
+    # The rings as nuScenes stores them: a fifth value per point.
+    records = np.c_[ordered, np.zeros(len(ordered)), beam].astype(np.float32)
+    records.tofile(tmp_path / "rings.bin")
+    np.testing.assert_array_equal(lidarsurf.read_rings(str(tmp_path / "rings.bin")), beam)
+    with pytest.raises(ValueError, match="entries"):
+        lidarsurf.ring_holdout(ordered, rings=beam[:-1])
+    with pytest.raises(ValueError, match="whole numbers"):
+        lidarsurf.ring_holdout(ordered, rings=beam + 0.5)
+
+
 def test_reconstructor_meshes_incrementally_with_the_mesh_of_one_extraction(scan):
     # A revolution in two halves (by azimuth), a mesh after each: the second mesh is the mesh of
     # the whole scan, and its extraction took vertices from the first.

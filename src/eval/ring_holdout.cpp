@@ -45,11 +45,13 @@ HoldoutDistances summarise(double lo, double hi, const std::vector<double>& d, c
 std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud) {
     const std::vector<Eigen::Vector3d>& pts = cloud.points;
     if (pts.size() < 2) throw InvalidInput("ring split: the scan has fewer than 2 points");
+    std::vector<double> azimuth(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) azimuth[i] = azimuth_deg(pts[i]);
     // The direction of rotation: the sign of the summed small turns (KITTI: counter-clockwise).
     double summed = 0;
     std::size_t small = 0;
     for (std::size_t i = 1; i < pts.size(); ++i) {
-        const double d = turn(azimuth_deg(pts[i - 1]), azimuth_deg(pts[i]));
+        const double d = turn(azimuth[i - 1], azimuth[i]);
         if (std::fabs(d) < 10) {
             summed += d;
             ++small;
@@ -68,17 +70,17 @@ std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud) {
     // behind the start) takes one crossing back, and a new ring needs more crossings than any
     // point before reached, so such a point stays in the ring being swept.
     constexpr double kTurnBack = 20;  // degrees; KITTI's rings never step back by more than 7
-    const double cut = azimuth_deg(pts.back()) + sign * 1e-6;
-    auto relative = [&](const Eigen::Vector3d& p) {
-        double a = std::fmod(sign * (azimuth_deg(p) - cut), 360.0);
+    const double cut = azimuth.back() + sign * 1e-6;
+    auto relative = [&](double azimuth_of_point) {
+        const double a = std::fmod(sign * (azimuth_of_point - cut), 360.0);
         return a < 0 ? a + 360 : a;
     };
     std::vector<std::uint16_t> rings(pts.size());
     long crossings = 0, most = 0;
     std::size_t ring = 0;
-    double prev = relative(pts[0]);
+    double prev = relative(azimuth[0]);
     for (std::size_t i = 1; i < pts.size(); ++i) {
-        const double a = relative(pts[i]);
+        const double a = relative(azimuth[i]);
         bool restart = false;
         if (prev - a > 180) {
             if (++crossings > most) {
