@@ -17,9 +17,9 @@ namespace lidarsurf {
 /// Ring of each point of a scan stored ring after ring, each ring one revolution (KITTI's
 /// HDL-64E order): a ring ends where the azimuth atan2(y, x), swept in either direction, passes
 /// the azimuth of the scan's last point (the end of the last ring: every ring is cut there), or
-/// turns back by more than 20 degrees (a ring that saw only part of the revolution). Rings are numbered 0, 1, ... in file order. Throws InvalidInput for
-/// a scan whose consecutive points do not sweep the azimuth (not ring-ordered), with no restart,
-/// or with more than 4096 rings.
+/// turns back by more than 20 degrees (a ring that saw only part of the revolution). Rings are
+/// numbered 0, 1, ... in file order. Throws InvalidInput for a scan whose consecutive points do
+/// not sweep the azimuth (not ring-ordered), with no restart, or with more than 4096 rings.
 std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud);
 
 struct RingSplit {
