@@ -75,6 +75,7 @@ struct EvaluateOptions {
     EvaluationConfig eval;
     RingHoldoutConfig rings;
     bool max_range_given = false;
+    std::string ring_option;  // --ring-field or --range-bin when given: they need --holdout-rings
     bool json_given = false, mesh_out_given = false;  // an option given with an empty name is an error
 };
 
@@ -144,6 +145,7 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     if (o.mesh_out_given) files.output(o.mesh_out, "--mesh-out");
     files.check();
     if (o.mesh_out_given) mesh_format_for(o.mesh_out);  // an unknown extension: exit 2 now
+    if (!o.holdout_rings && !o.ring_option.empty()) throw InvalidArgument(o.ring_option + " is for --holdout-rings");
     if (o.holdout_rings) {
         if (o.holdout != 0) throw InvalidArgument("give --holdout or --holdout-rings, not both");
         if (o.mesh_out_given) throw InvalidArgument("--mesh-out is for --holdout");
@@ -254,8 +256,11 @@ int main(int argc, char** argv) {
     ev->add_option("--ring-field", eo.ring_field,
                    "With --holdout-rings: where the rings come from: auto (the 5th value of --bin-fields 5 records, else the "
                    "point order), order (a ring ends where the azimuth restarts, KITTI), or the index of the .bin value")
-        ->capture_default_str();
-    ev->add_option("--range-bin", eo.rings.range_bin, "With --holdout-rings: width of the range bins, metres")->capture_default_str();
+        ->capture_default_str()
+        ->each([&eo](const std::string&) { eo.ring_option = "--ring-field"; });
+    ev->add_option("--range-bin", eo.rings.range_bin, "With --holdout-rings: width of the range bins, metres")
+        ->capture_default_str()
+        ->each([&eo](const std::string&) { eo.ring_option = "--range-bin"; });
     ev->add_option("--seed", eo.seed, "Seed of the hold-out split and of the surface sampling")->capture_default_str();
     ev->add_option("--max-range", eo.eval.max_range, "Evaluate only within this range of --origin (0 = all; --holdout-rings: 30)")
         ->capture_default_str()

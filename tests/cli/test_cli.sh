@@ -60,6 +60,7 @@ expect 3 "not stored ring after ring" -- "$cli" evaluate --holdout-rings "$dir/s
 expect 2 "ring field must be" -- "$cli" evaluate --holdout-rings "$dir/rings5.bin" --bin-fields 5 --ring-field 5
 expect 2 "auto, order" -- "$cli" evaluate --holdout-rings "$dir/rings.bin" --ring-field top
 expect 2 "not both" -- "$cli" evaluate --holdout-rings --holdout 0.5 "$dir/rings.bin"
+expect 2 "ring-field is for --holdout-rings" -- "$cli" evaluate --holdout 0.5 "$dir/rings.bin" --ring-field order
 expect 2 "takes MESH GT" -- "$cli" evaluate "$dir/mesh.ply"
 expect 2 "one scan" -- "$cli" evaluate --holdout 0.5 "$dir/scan.bin" "$dir/gt.bin"
 expect 2 "fraction" -- "$cli" evaluate --holdout 1.5 "$dir/scan.bin"
