@@ -114,7 +114,7 @@ Mesh reconstruct_py(const py::handle& points, const std::vector<double>& origin,
     return reconstruct_with(m, as_span(view), sensor);  // the array read in place
 }
 
-// Ring numbers from Python: None, or a 1-D array of whole numbers in [0, 4095], one per point.
+// Ring numbers from Python: None, or a 1-D array of whole numbers in [0, kMaxRing], one per point.
 std::vector<std::uint16_t> rings_of(const py::handle& rings, std::size_t points) {
     if (rings.is_none()) return {};
     const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(rings);
@@ -123,9 +123,9 @@ std::vector<std::uint16_t> rings_of(const py::handle& rings, std::size_t points)
         throw InvalidArgument("rings has " + std::to_string(a.shape(0)) + " entries for " + std::to_string(points) + " points");
     std::vector<std::uint16_t> out(points);
     for (std::size_t i = 0; i < points; ++i) {
-        const double r = a.data()[i];
-        if (!(r >= 0 && r <= 4095 && r == std::floor(r))) throw InvalidArgument("rings must be whole numbers in [0, 4095]");
-        out[i] = static_cast<std::uint16_t>(r);
+        const std::optional<std::uint16_t> ring = ring_number(a.data()[i]);
+        if (!ring) throw InvalidArgument("rings must be whole numbers in [0, " + std::to_string(kMaxRing) + "]");
+        out[i] = *ring;
     }
     return out;
 }
@@ -426,11 +426,11 @@ PYBIND11_MODULE(_lidarsurf, m) {
     m.def(
         "rings_from_order",
         [](const py::handle& points) {
-            const PointCloud cloud = cloud_of(points);
+            const PointArray view = points_view(points, "points");
             std::vector<std::uint16_t> rings;
             {
                 py::gil_scoped_release release;
-                rings = rings_from_order(cloud);
+                rings = rings_from_order(as_span(view));  // the array read in place
             }
             return rings_to_numpy(rings);
         },

@@ -15,8 +15,6 @@
 namespace lidarsurf {
 namespace {
 
-constexpr std::size_t kMaxRings = 4096;
-
 double azimuth_deg(const Eigen::Vector3d& p) { return std::atan2(p.y(), p.x()) * 180.0 / std::numbers::pi; }
 
 // The step from a to b wrapped into (-180, 180] degrees.
@@ -42,8 +40,7 @@ HoldoutDistances summarise(double lo, double hi, const std::vector<double>& d, c
 
 }  // namespace
 
-std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud) {
-    const std::vector<Eigen::Vector3d>& pts = cloud.points;
+std::vector<std::uint16_t> rings_from_order(std::span<const Eigen::Vector3d> pts) {
     if (pts.size() < 2) throw InvalidInput("ring split: the scan has fewer than 2 points");
     std::vector<double> azimuth(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i) azimuth[i] = azimuth_deg(pts[i]);
@@ -92,8 +89,8 @@ std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud) {
         } else if (a - prev < -kTurnBack) {
             restart = true;
         }
-        if (restart && ++ring >= kMaxRings)
-            throw InvalidInput("ring split: more than " + format_value(kMaxRings) + " azimuth restarts; the points are not stored ring after ring");
+        if (restart && ++ring > kMaxRing)
+            throw InvalidInput("ring split: more than " + format_value(kMaxRing + 1) + " rings; the points are not stored ring after ring");
         rings[i] = static_cast<std::uint16_t>(ring);
         prev = a;
     }

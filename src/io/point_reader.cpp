@@ -18,19 +18,16 @@ namespace lidarsurf {
 
 std::size_t drop_non_finite(PointCloud& cloud) {
     const std::size_t before = cloud.points.size();
-    if (cloud.rings.size() == before) {
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < before; ++i) {
-            if (!cloud.points[i].allFinite()) continue;
-            cloud.points[kept] = cloud.points[i];
-            cloud.rings[kept++] = cloud.rings[i];
-        }
-        cloud.points.resize(kept);
-        cloud.rings.resize(kept);
-        return before - kept;
+    const bool rings = cloud.rings.size() == before;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < before; ++i) {
+        if (!cloud.points[i].allFinite()) continue;
+        if (rings) cloud.rings[kept] = cloud.rings[i];
+        cloud.points[kept++] = cloud.points[i];
     }
-    std::erase_if(cloud.points, [](const Eigen::Vector3d& p) { return !p.allFinite(); });
-    return before - cloud.points.size();
+    cloud.points.resize(kept);
+    if (rings) cloud.rings.resize(kept);
+    return before - kept;
 }
 
 namespace detail {
@@ -106,11 +103,12 @@ PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string&
     if (ring_field >= 0) {
         cloud.rings.resize(n);
         for (std::size_t i = 0; i < n; ++i) {
-            const float r = load<float>(data.data() + i * record + 4 * static_cast<std::size_t>(ring_field), false);
-            if (!(r >= 0 && r <= 4095 && r == std::floor(r)))
-                throw FormatError(name + ": point " + std::to_string(i) + " has ring " + format_value(static_cast<double>(r)) +
-                                  " in field " + std::to_string(ring_field) + "; rings are whole numbers in [0, 4095]");
-            cloud.rings[i] = static_cast<std::uint16_t>(r);
+            const double r = load<float>(data.data() + i * record + 4 * static_cast<std::size_t>(ring_field), false);
+            const std::optional<std::uint16_t> ring = ring_number(r);
+            if (!ring)
+                throw FormatError(name + ": point " + std::to_string(i) + " has ring " + format_value(r) + " in field " +
+                                  std::to_string(ring_field) + "; rings are whole numbers in [0, " + std::to_string(kMaxRing) + "]");
+            cloud.rings[i] = *ring;
         }
     }
     return cloud;

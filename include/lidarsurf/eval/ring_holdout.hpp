@@ -5,6 +5,7 @@
 // rings (docs/evaluation.md).
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -19,8 +20,9 @@ namespace lidarsurf {
 /// the azimuth of the scan's last point (the end of the last ring: every ring is cut there), or
 /// turns back by more than 20 degrees (a ring that saw only part of the revolution). Rings are
 /// numbered 0, 1, ... in file order. Throws InvalidInput for a scan whose consecutive points do
-/// not sweep the azimuth (not ring-ordered), with no restart, or with more than 4096 rings.
-std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud);
+/// not sweep the azimuth (not ring-ordered), with no restart, or with more than kMaxRing + 1 rings.
+std::vector<std::uint16_t> rings_from_order(std::span<const Eigen::Vector3d> points);
+inline std::vector<std::uint16_t> rings_from_order(const PointCloud& cloud) { return rings_from_order(std::span<const Eigen::Vector3d>(cloud.points)); }
 
 struct RingSplit {
     PointCloud even;  ///< points of even rings: reconstructed

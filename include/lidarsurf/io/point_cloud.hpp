@@ -1,7 +1,9 @@
 #pragma once
 // A point cloud as read from a file: positions, and the ring of each point when asked for
 // (other fields are ignored by the readers).
+#include <cmath>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -12,6 +14,15 @@ struct PointCloud {
     std::vector<Eigen::Vector3d> points;
     std::vector<std::uint16_t> rings = {};  ///< empty, or the laser ring of each point
 };
+
+/// Ring numbers are whole numbers in [0, kMaxRing].
+inline constexpr std::uint16_t kMaxRing = 4095;
+
+/// `value` as a ring number; nullopt when it is not a whole number in [0, kMaxRing].
+inline std::optional<std::uint16_t> ring_number(double value) {
+    if (!(value >= 0 && value <= kMaxRing && value == std::floor(value))) return std::nullopt;
+    return static_cast<std::uint16_t>(value);
+}
 
 /// Removes points with a NaN or infinite coordinate (and their rings); returns how many were removed.
 std::size_t drop_non_finite(PointCloud& cloud);
