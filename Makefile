@@ -42,11 +42,11 @@ sanitize: setup
 
 # The parallel code under ThreadSanitizer (third build directory): the tests whose code runs TBB
 # loops (surface search, reference TSDF, free-space carving, IMLS, metrics, map metrics, simulator,
-# renderer, pipeline), linked
+# renderer, pipeline, the live mesh), linked
 # against Debian's oneTBB source rebuilt with TSan (scripts/build_tbb_tsan.sh: Debian's libtbb is
 # not instrumented, and TSan would report every hand-off between its threads as a race).
 # The four slowest (the same parallel code on more data, 290 s under TSan) are left out.
-TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*$\
+TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo
 tsan:
 	@bash scripts/setup.sh tsan

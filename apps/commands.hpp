@@ -57,6 +57,9 @@ struct FuseOptions {
     std::string dir, output, mesh_format = "auto", calib, poses, json;
     int first = 0, frames = 0, step = 1, remesh_every = 0;
     bool quiet = false;  // no progress report
+    bool live = false;   // keep the live mesh, updated after every scan
+    double live_budget_ms = 30;
+    int live_check_every = 0;  // compare the live mesh with the exact one every this many scans (0: never)
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
 };
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);

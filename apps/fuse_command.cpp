@@ -4,6 +4,8 @@
 // toward the sensor positions that saw it (docs/method.md, "Sequences"); with --remesh-every the
 // mesh is extracted along the way, each extraction redoing only what the new scans reach.
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -18,6 +20,8 @@
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/eval/live_staleness.hpp"
+#include "lidarsurf/eval/metrics.hpp"
 
 namespace fs = std::filesystem;
 
@@ -43,6 +47,27 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("--remesh-every", o.remesh_every,
                   "Also extract the mesh after every this many fused frames, printing its time (0 = only at the end)")
         ->capture_default_str();
+    f->add_flag("--live", o.live,
+                "Keep a live mesh, updated after every scan nearest the sensor first within --live-budget-ms (the "
+                "output is still the exact mesh; --json reports update_ms, delta_triangles, live_triangles per frame)");
+    f->add_option("--live-budget-ms", o.live_budget_ms, "Time for the live mesh's update after each scan (ms; 0 = everything due)")
+        ->capture_default_str();
+    f->add_option("--live-check-every", o.live_check_every,
+                  "With --live: every this many scans, extract the exact mesh and measure the live mesh against it within "
+                  "30 m of the sensor (the share of its area farther than 5 cm; slow: the exact extraction)")
+        ->capture_default_str();
+    f->add_option("--live-growth", o.reconstruct.config.live_growth,
+                  "Live mesh: re-mesh a block when the points near it grew by this fraction since it was meshed")
+        ->capture_default_str();
+    f->add_option("--live-range", o.reconstruct.config.live_range,
+                  "Live mesh: blocks farther than this from the sensor (metres) wait until it comes back near them")
+        ->capture_default_str();
+    f->add_option("--live-reach-blocks", o.reconstruct.config.live_reach_blocks,
+                  "Live mesh: a block depends on the changes within this many blocks (8 voxels) of it")
+        ->capture_default_str();
+    f->add_option("--live-halo-cubes", o.reconstruct.config.live_halo_cubes,
+                  "Live mesh: the surface search of a block reaches this many cubes beyond it")
+        ->capture_default_str();
     f->add_option("--json", o.json, "Also write a report: times by stage, and per frame the time, voxels and resident memory");
     f->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     add_reconstruct_options(f, o.reconstruct);
@@ -56,6 +81,9 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
 }
 
 namespace {
+// The live mesh's staleness (docs/method.md, "Live mesh"): within 30 m of the sensor, 5 cm.
+constexpr double kStalenessRadius = 30.0, kStalenessTolerance = 0.05;
+
 double resident_mib() {
     long pages = 0, resident = 0;
     if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
@@ -74,8 +102,13 @@ double peak_resident_mib() {
 int run_fuse(const FuseOptions& o) {
     if (o.first < 0 || o.frames < 0 || o.step < 1 || o.remesh_every < 0)
         throw InvalidArgument("--first and --frames must be >= 0, --step >= 1, --remesh-every >= 0");
+    if (!std::isfinite(o.live_budget_ms) || o.live_budget_ms < 0 || o.live_check_every < 0)
+        throw InvalidArgument("--live-budget-ms and --live-check-every must be >= 0");
+    if (!o.live && o.live_check_every > 0) throw InvalidArgument("--live-check-every measures the live mesh: add --live");
     const Method m = resolve_method(o.reconstruct);
     if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
+    if (o.live && !m.config.seeded_surface)
+        throw InvalidArgument("--live needs the seeded surface: the paper's method as written meshes every defined cube of the whole map");
     const MeshFormat requested = parse_mesh_format(o.mesh_format);
     const KittiSequence seq{o.dir};
     const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
@@ -105,6 +138,7 @@ int run_fuse(const FuseOptions& o) {
     double read_ms = 0;
     bool fresh = false;  // whether `mesh` holds every frame fused so far
     nlohmann::json per_frame = nlohmann::json::array();
+    std::vector<double> update_times, stale_shares;
     Progress progress("fuse", "frames", frames.size(), o.quiet);
     for (std::size_t n = 0; n < frames.size(); ++n) {
         const std::size_t i = frames[n];
@@ -114,11 +148,35 @@ int run_fuse(const FuseOptions& o) {
         for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN: integrate drops it
         read_ms += ms_since(t0);
         const double before = rec.summary().seconds_insert + rec.summary().seconds_carve;
+        const auto t_update = std::chrono::steady_clock::now();
         rec.integrate(cloud.points, pose * m.sensor);
         nlohmann::json row = {{"frame", i},
                               {"integrate_ms", 1e3 * (rec.summary().seconds_insert + rec.summary().seconds_carve - before)},
                               {"voxels", rec.summary().voxels}};
         fresh = false;
+        if (o.live) {
+            const MeshDelta delta = rec.update_mesh(o.live_budget_ms);
+            const double update_ms = ms_since(t_update);
+            update_times.push_back(update_ms);
+            row["update_ms"] = update_ms;
+            row["live_ms"] = 1e3 * delta.seconds;
+            row["delta_blocks"] = delta.changed.size() + delta.removed.size();
+            row["delta_triangles"] = delta.triangles();
+            row["meshed_blocks"] = delta.meshed_blocks;
+            row["pending_blocks"] = delta.pending;
+            row["live_triangles"] = rec.live()->triangle_count();
+            if (o.live_check_every > 0 && ((n + 1) % static_cast<std::size_t>(o.live_check_every) == 0 || n + 1 == frames.size())) {
+                mesh = rec.extract_mesh();
+                fresh = true;
+                const Staleness st = measure_staleness(rec.live_mesh(), mesh, pose * m.sensor, kStalenessRadius, kStalenessTolerance);
+                stale_shares.push_back(st.share());
+                row["staleness"] = {{"share", st.share()},
+                                    {"live_area_m2", st.live_area},
+                                    {"stale_area_m2", st.stale_area},
+                                    {"exact_area_m2", st.exact_area},
+                                    {"covered_share", st.covered_share()}};
+            }
+        }
         progress.update(n + 1, std::to_string(rec.summary().voxels) + " voxels");
         if (o.remesh_every > 0 && ((n + 1) % static_cast<std::size_t>(o.remesh_every) == 0 || n + 1 == frames.size())) {
             mesh = rec.extract_mesh();
@@ -143,7 +201,7 @@ int run_fuse(const FuseOptions& o) {
     std::fprintf(report, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
                 method_name(m).c_str(), where.layout.c_str(), s.to_string().c_str(), read_ms, write_ms, o.output.c_str());
     if (!o.json.empty()) {
-        const nlohmann::json j = {{"sequence", o.dir},
+        nlohmann::json j = {{"sequence", o.dir},
                                   {"poses", where.poses.string()},
                                   {"method", method_name(m)},
                                   {"carve", m.config.carve},
@@ -162,6 +220,25 @@ int run_fuse(const FuseOptions& o) {
                                     {"write", write_ms / 1e3}}},
                                   {"peak_resident_mib", peak_resident_mib()},
                                   {"per_frame", per_frame}};
+        if (o.live) {
+            const DirectedError update = summarize(update_times);
+            nlohmann::json live = {{"budget_ms", o.live_budget_ms},
+                                   {"growth", m.config.live_growth},
+                                   {"range_m", m.config.live_range},
+                                   {"reach_blocks", m.config.live_reach_blocks},
+                                   {"halo_cubes", m.config.live_halo_cubes},
+                                   {"update_ms_median", update.median},
+                                   {"update_ms_p90", update.p90},
+                                   {"update_ms_max", update.max}};
+            if (!stale_shares.empty()) {
+                live["staleness_radius_m"] = kStalenessRadius;
+                live["staleness_tolerance_m"] = kStalenessTolerance;
+                const DirectedError stale = summarize(stale_shares);
+                live["staleness_median"] = stale.median;
+                live["staleness_max"] = stale.max;
+            }
+            j["live"] = live;
+        }
         AtomicFile out(o.json);
         out.stream() << j.dump(1) << "\n";
         out.commit();

@@ -146,6 +146,8 @@ int run_evaluate(EvaluateOptions& o, const ReconstructOptions& ro) {
     files.check();
     if (o.mesh_out_given) mesh_format_for(o.mesh_out);  // an unknown extension: exit 2 now
     if (!o.holdout_rings && !o.ring_option.empty()) throw InvalidArgument(o.ring_option + " is for --holdout-rings");
+    if (o.mesh_out_given && o.holdout == 0 && !o.holdout_rings)
+        throw InvalidArgument("--mesh-out writes the mesh of the kept points of --holdout; evaluate MESH GT makes no mesh");
     if (o.holdout_rings) {
         if (o.holdout != 0) throw InvalidArgument("give --holdout or --holdout-rings, not both");
         if (o.mesh_out_given) throw InvalidArgument("--mesh-out is for --holdout");

@@ -24,6 +24,11 @@ sim::SensorModel load_sensor(const std::string& spec) {
     return sim::SensorModel::preset(spec);
 }
 
+// The message for a view that sees nothing: a scan with no point is no scan.
+std::string no_return_message(const std::string& sensor) {
+    return "the sensor (" + sensor + ") sees nothing from where it stands: no ray returns within its range; nothing was written";
+}
+
 sim::World load_world(const SimulateOptions& o) {
     const std::string ext = extension_of(o.scene);
     if (ext == ".ply" || ext == ".obj") {
@@ -73,6 +78,7 @@ int simulate_demo(const SimulateOptions& o) {
     const auto world = sim::AnalyticScene::demo();
     const sim::SensorModel sensor = load_sensor(o.sensor);
     const PointCloud cloud = sim::simulate_scan(world, sensor, Eigen::Vector3d::Zero(), o.seed);
+    if (cloud.points.empty()) throw InvalidInput(no_return_message(o.sensor));
     if (!o.gt.empty()) {
         const sim::SensorModel gts = sim::SensorModel::ground_truth_for(sensor, o.gt_beams > 0 ? o.gt_beams : 316);
         const PointCloud gt = sim::simulate_scan(world, gts, Eigen::Vector3d::Zero(), o.seed);
@@ -135,6 +141,7 @@ int run_simulate(const SimulateOptions& o) {
 
     if (single) {
         const sim::SimulatedFrame f = simulator.frame(0);
+        if (f.scan.points.empty()) throw InvalidInput(no_return_message(o.sensor));
         write_points(f.scan, o.output);
         if (!o.gt.empty()) write_points(f.ground_truth, o.gt);
         std::printf("simulated %zu points (scene %s, %s, mid-drive, sensor frame, seed %llu) -> %s%s%s\n", f.scan.points.size(),

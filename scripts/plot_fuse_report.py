@@ -44,6 +44,11 @@ def main(argv):
     axes[1].set_ylabel("voxels (millions)")
     axes[2].set_ylabel("resident memory (MiB)")
     axes[2].set_xlabel("scan")
+    finish(fig, axes, out)
+
+
+def finish(fig, axes, out):
+    """Grids and legends on every panel, then the figure to `out`."""
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)

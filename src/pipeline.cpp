@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include <tbb/task_arena.h>
@@ -44,7 +45,7 @@ std::string ReconstructionSummary::to_string() const {
 }
 
 Reconstructor::Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor)
-    : config_(validated(config)), sensor_(sensor), grid_(config.voxel_size) {
+    : config_(validated(config)), sensor_(sensor), grid_(config.voxel_size), last_viewpoint_(sensor) {
     if (!sensor.allFinite()) throw InvalidArgument("sensor origin must be finite");
 }
 
@@ -61,11 +62,21 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eig
         if (grid_.point_count() > 0) previous_.reset();  // every orientation may change: evaluate all again
     }
     add(points, viewpoint);
+    last_viewpoint_ = viewpoint;
+}
+
+MeshDelta Reconstructor::update_mesh(double budget_ms) {
+    if (!std::isfinite(budget_ms)) throw InvalidArgument("update_mesh: the budget must be finite (<= 0: no limit)");
+    if (!live_) live_.emplace(config_);
+    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    return arena.execute([&] {
+        live_->record(grid_);
+        return live_->update(grid_, sensor_, last_viewpoint_, budget_ms / 1e3);
+    });
 }
 
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from) {
     const auto t0 = std::chrono::steady_clock::now();
-    summary_.points_read += points.size();
     // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points):
     // a frame cut in two chunks paid two groupings and two parallel updates (0.6-0.8 ms).
     constexpr std::size_t kChunk = 1 << 18;
@@ -91,6 +102,7 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
             }
         }
         summary_.points_dropped += arena.execute([&] { return grid_.insert(chunk, seen_from, carving ? &chunk_hits : nullptr); });
+        summary_.points_read += chunk.size();  // a refused chunk leaves no trace, in the counts either
         for (VoxelGrid::Hit h : chunk_hits) {
             h.point += static_cast<std::uint32_t>(begin);
             hits.push_back(h);

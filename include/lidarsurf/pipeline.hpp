@@ -13,7 +13,8 @@
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
-#include "lidarsurf/surface/free_space.hpp"
+#include "lidarsurf/map/free_space.hpp"
+#include "lidarsurf/map/live_mesh.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
@@ -75,6 +76,18 @@ public:
     /// integrations gives. The reference path always evaluates every vertex.
     Mesh extract_mesh(Evaluation evaluation = Evaluation::Fast);
 
+    /// Brings the live mesh up to date with the scans integrated since the last call, nearest the
+    /// last viewpoint first, within `budget_ms` milliseconds (<= 0: everything due), and returns
+    /// what changed (map/live_mesh.hpp): applying the deltas in order gives live_mesh(). The
+    /// first call meshes what the grid holds. The exact mesh stays extract_mesh(), which the live
+    /// mesh does not change. Throws InvalidArgument for a configuration without the seeded surface
+    /// (the paper as written).
+    MeshDelta update_mesh(double budget_ms = 0);
+    /// The live mesh as the updates so far made it (empty before the first update_mesh()).
+    Mesh live_mesh() const { return live_ ? live_->mesh() : Mesh{}; }
+    /// The live mesh's state, or nullptr before the first update_mesh().
+    const LiveMesh* live() const { return live_ ? &*live_ : nullptr; }
+
     const ReconstructionSummary& summary() const { return summary_; }
     const VoxelGrid& grid() const { return grid_; }
     const ReconstructionConfig& config() const { return config_; }
@@ -89,6 +102,8 @@ private:
     VoxelGrid grid_;
     std::optional<TsdfField> previous_;  // the last fast extraction's field, for the next one
     std::optional<FreeSpaceCarver> carver_;  // with config.carve, from the first scan with a viewpoint
+    std::optional<LiveMesh> live_;           // from the first update_mesh()
+    Eigen::Vector3d last_viewpoint_;         // where the last scan was seen from: the live mesh's nearest blocks go first
     ReconstructionSummary summary_;
 };
 

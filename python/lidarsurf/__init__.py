@@ -9,12 +9,12 @@ numpy in, numpy out; the same Config as the C++ library and the CLI.
 """
 import json as _json
 
-from ._lidarsurf import (Config, Mesh, Reconstructor, __version__, points_view, read_mesh, read_points,
+from ._lidarsurf import (Config, Mesh, MeshDelta, Reconstructor, __version__, points_view, read_mesh, read_points,
                          read_poses, read_rings, reconstruct, rings_from_order, set_simd_level, simd_level,
                          simd_levels, simulate)
 from ._lidarsurf import _evaluate_json, _ring_holdout_json
 
-__all__ = ["Config", "Mesh", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "read_rings", "evaluate",
+__all__ = ["Config", "Mesh", "MeshDelta", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "read_rings", "evaluate",
            "ring_holdout", "rings_from_order", "simulate", "points_view", "simd_level", "simd_levels", "set_simd_level",
            "__version__"]
 

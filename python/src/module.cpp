@@ -220,6 +220,14 @@ PYBIND11_MODULE(_lidarsurf, m) {
                        "Carving: scans that must see through a voxel (and more than hit it) before it is removed.")
         .def_readwrite("carve_range", &ReconstructionConfig::carve_range,
                        "Carving: the voxels within this distance (metres) of each scan's sensor are tested against it.")
+        .def_readwrite("live_growth", &ReconstructionConfig::live_growth,
+                       "Live mesh: a block is meshed again when the points within live_reach_blocks of it grew by this fraction.")
+        .def_readwrite("live_range", &ReconstructionConfig::live_range,
+                       "Live mesh: blocks farther than this (metres) from the last viewpoint wait until it comes back near them.")
+        .def_readwrite("live_reach_blocks", &ReconstructionConfig::live_reach_blocks,
+                       "Live mesh: a block depends on the changes (points, removed voxels) within this many 8-voxel blocks of it.")
+        .def_readwrite("live_halo_cubes", &ReconstructionConfig::live_halo_cubes,
+                       "Live mesh: the surface search of the blocks being meshed reaches this many cubes beyond them.")
         .def_readwrite("threads", &ReconstructionConfig::threads, "Worker threads; 0 = all cores.")
         .def_readwrite("max_memory_mb", &ReconstructionConfig::max_memory_mb,
                        "Memory budget in MiB; a reconstruction estimated to need more raises MemoryError.")
@@ -235,14 +243,22 @@ PYBIND11_MODULE(_lidarsurf, m) {
               << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")
               << ", seed_dilation=" << c.seed_dilation << ", carve=" << (c.carve ? "True" : "False")
               << ", carve_margin_voxels=" << c.carve_margin_voxels << ", carve_min_scans=" << c.carve_min_scans << ", carve_range=" << c.carve_range
-              << ", threads=" << c.threads << ")";
+              << ", live_growth=" << c.live_growth << ", live_range=" << c.live_range << ", live_reach_blocks=" << c.live_reach_blocks
+              << ", live_halo_cubes=" << c.live_halo_cubes << ", threads=" << c.threads << ")";
             return o.str();
         });
 
     py::class_<Mesh>(m, "Mesh", "Triangle mesh. Array attributes are read-only views into the mesh (no copy; np.array(a) for a copy).")
-        .def(py::init([](const py::handle& vertices, py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> triangles) {
+        .def(py::init([](const py::handle& vertices, const py::handle& triangle_array) {
                  const PointArray v = points_view(vertices, "vertices");
-                 if (triangles.ndim() != 2 || triangles.shape(1) != 3) throw InvalidArgument("triangles must have shape (T, 3)");
+                 const py::array given = py::array::ensure(triangle_array);
+                 if (!given) throw InvalidArgument("triangles must be an array of integer vertex indices");
+                 // Indices are integers: a float array (3.7?) is refused, not truncated. An empty one may be of any type.
+                 const char kind = given.dtype().kind();
+                 if (given.size() > 0 && kind != 'i' && kind != 'u')
+                     throw InvalidArgument(std::string("triangles must hold integer vertex indices (got dtype kind '") + kind + "')");
+                 const auto triangles = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(given);
+                 if (!triangles || triangles.ndim() != 2 || triangles.shape(1) != 3) throw InvalidArgument("triangles must have shape (T, 3)");
                  Mesh mesh;
                  const auto span = as_span(v);
                  mesh.vertices.assign(span.begin(), span.end());
@@ -294,6 +310,35 @@ PYBIND11_MODULE(_lidarsurf, m) {
             return "Mesh(" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.triangles.size()) + " triangles)";
         });
 
+    py::class_<MeshDelta>(m, "MeshDelta",
+                          "What one Reconstructor.update_mesh() changed in the live mesh: apply `removed` then `changed` to a "
+                          "dict {key: Mesh} kept from the earlier updates, in order, to hold the live mesh.")
+        .def_property_readonly(
+            "changed",
+            [](const MeshDelta& d) {
+                py::list out;
+                for (const MeshBlock& b : d.changed) out.append(py::make_tuple(py::make_tuple(b.key.x(), b.key.y(), b.key.z()), b.mesh));
+                return out;
+            },
+            "[(key, Mesh)]: the blocks whose triangles changed, each with its whole new mesh (world coordinates, numpy "
+            "arrays); key = (x, y, z), the block of cubes 8 key .. 8 key + 7 of the voxel lattice.")
+        .def_property_readonly(
+            "removed",
+            [](const MeshDelta& d) {
+                py::list out;
+                for (const VoxelKey& k : d.removed) out.append(py::make_tuple(k.x(), k.y(), k.z()));
+                return out;
+            },
+            "[key]: the blocks left without a triangle.")
+        .def_readonly("meshed_blocks", &MeshDelta::meshed_blocks, "Blocks meshed by the update (their mesh changed or not).")
+        .def_readonly("pending", &MeshDelta::pending, "Blocks due and left for later updates.")
+        .def_readonly("seconds", &MeshDelta::seconds, "The update's wall time.")
+        .def_property_readonly("triangles", &MeshDelta::triangles, "Triangles in `changed`.")
+        .def("__repr__", [](const MeshDelta& d) {
+            return "MeshDelta(" + std::to_string(d.changed.size()) + " blocks changed, " + std::to_string(d.removed.size()) + " removed, " +
+                   std::to_string(d.triangles()) + " triangles, " + std::to_string(d.pending) + " pending)";
+        });
+
     py::class_<SharedReconstructor>(m, "Reconstructor",
                               "A reconstruction that accepts more points: integrate() scans or parts of scans seen from the same "
                               "origin, extract_mesh() whenever a mesh is needed. Each extraction re-evaluates only the vertices the "
@@ -337,6 +382,27 @@ PYBIND11_MODULE(_lidarsurf, m) {
                 return self.rec.extract_mesh();
             },
             "The mesh of every point integrated so far. Raises ValueError if no finite point was integrated.")
+        .def(
+            "update_mesh",
+            [](SharedReconstructor& self, double budget_ms) {
+                py::gil_scoped_release release;
+                const std::lock_guard lock(self.mutex);
+                return self.rec.update_mesh(budget_ms);
+            },
+            py::arg("budget_ms") = 0.0,
+            "Bring the live mesh up to date with the scans integrated since the last call, the blocks nearest the last "
+            "viewpoint first, within budget_ms milliseconds (0: everything due), and return a MeshDelta. Applying the "
+            "deltas in order gives live_mesh(). extract_mesh() stays the exact mesh. Raises ValueError for the paper's "
+            "method as written (seeded_surface False).")
+        .def(
+            "live_mesh",
+            [](SharedReconstructor& self) {
+                py::gil_scoped_release release;
+                const std::lock_guard lock(self.mutex);
+                return self.rec.live_mesh();
+            },
+            "The live mesh as the update_mesh() calls so far made it: each block's mesh one after the other (vertices "
+            "repeated on block faces).")
         .def_property_readonly(
             "summary",
             [](SharedReconstructor& self) {

@@ -252,6 +252,11 @@ def test_evaluate_returns_the_metrics(scan):
     assert m["paper"]["ae_sym"] == pytest.approx(0.1, abs=1e-9)
     with pytest.raises(ValueError, match="refers to vertex"):
         lidarsurf.Mesh(verts, np.array([[0, 1, 500]]))
+    # Indices are integers: a float array is refused, not truncated (0.9 would be vertex 0).
+    with pytest.raises(ValueError, match="integer vertex indices"):
+        lidarsurf.Mesh(verts, np.array(tris, dtype=np.float64) + 0.9)
+    assert len(lidarsurf.Mesh(verts, np.array(tris, dtype=np.uint32)).triangles) == len(tris)
+    assert len(lidarsurf.Mesh(verts, np.zeros((0, 3))).triangles) == 0
 
 
 def test_ring_holdout_on_a_scan_stored_ring_after_ring(scan, tmp_path):
@@ -330,6 +335,58 @@ def test_reconstructor_fuses_scans_seen_from_several_positions(scan):
     assert abs(len(both.vertices) - 2 * len(one.vertices)) < 0.02 * len(one.vertices)
     with pytest.raises(ValueError, match="viewpoint"):
         rec.integrate_from(scan, (0, 0))
+
+
+def test_a_batch_refused_for_its_span_leaves_no_lattice_origin(scan):
+    # A first point 1e7 m away: the batch spans too far and is refused; the next batch is taken as
+    # if it came first (the same mesh as a reconstructor that never saw the refused one).
+    far = scan.copy()
+    far[0] = (1e7, 0, 0)
+    rec = lidarsurf.Reconstructor()
+    with pytest.raises(ValueError, match="voxels"):
+        rec.integrate(far)
+    rec.integrate(scan)
+    expected = lidarsurf.Reconstructor()
+    expected.integrate(scan)
+    assert np.array_equal(rec.extract_mesh().vertices, expected.extract_mesh().vertices)
+    assert rec.summary["points_read"] == len(scan)
+
+
+def test_live_mesh_deltas_applied_in_order_give_the_live_mesh(scan):
+    # A drive of three copies of the scan seen from three places; the client keeps {key: Mesh}.
+    rec = lidarsurf.Reconstructor()
+    client = {}
+    for x in (0.0, 6.0, 12.0):
+        shift = np.array([x, 0.0, 0.0])
+        rec.integrate_from(scan + shift, shift)
+        delta = rec.update_mesh(budget_ms=20)
+        assert isinstance(delta, lidarsurf.MeshDelta) and delta.seconds >= 0
+        for key in delta.removed:
+            del client[key]
+        for key, mesh in delta.changed:
+            assert isinstance(key, tuple) and len(key) == 3 and len(mesh.triangles) > 0
+            client[key] = mesh
+    rest = rec.update_mesh()  # no budget: everything due
+    for key in rest.removed:
+        del client[key]
+    for key, mesh in rest.changed:
+        client[key] = mesh
+    assert rest.pending == 0
+    live = rec.live_mesh()
+    assert sum(len(m.triangles) for m in client.values()) == len(live.triangles)
+    ours = np.sort(np.concatenate([m.vertices[m.triangles].reshape(-1, 9) for m in client.values()]), axis=0)
+    theirs = np.sort(live.vertices[live.triangles].reshape(-1, 9), axis=0)
+    np.testing.assert_array_equal(ours, theirs)
+    # The live mesh lies on the exact mesh (its vertices are the exact mesh's, block by block).
+    exact = rec.extract_mesh()
+    assert len(live.triangles) > 0.9 * len(exact.triangles)
+    c = lidarsurf.Config()
+    c.live_growth = 0.5
+    assert "live_growth=0.5" in repr(c)
+    with pytest.raises(ValueError, match="seeded surface"):
+        paper = lidarsurf.Reconstructor(lidarsurf.Config.paper())
+        paper.integrate(scan)
+        paper.update_mesh()
 
 
 def test_read_poses_and_the_calibration(tmp_path):

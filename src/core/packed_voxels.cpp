@@ -1,6 +1,7 @@
 #include "lidarsurf/core/packed_voxels.hpp"
 
 #include <bit>
+#include <optional>
 #include <thread>
 
 #include <tbb/parallel_for.h>
@@ -30,6 +31,30 @@ PackedVoxels::PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t
     });
 }
 
+PackedVoxels::PackedVoxels(const VoxelGrid& grid, std::span<const std::uint32_t> blocks)
+    : grid_(&grid), subset_(true), grid_blocks_(blocks.begin(), blocks.end()) {
+    const std::size_t n = grid_blocks_.size();
+    blocks_.resize(n);
+    state_ = std::make_unique<std::atomic<std::uint8_t>[]>(n);
+    start_.assign(n + 1, 0);
+    std::vector<VoxelKey> keys(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        start_[i + 1] = start_[i] + static_cast<std::size_t>(popcount(grid.occupancy(grid_blocks_[i])));
+        keys[i] = grid.index().block_keys()[grid_blocks_[i]];
+    }
+    voxel_count_ = start_[n];
+    voxels_.reset(new Voxel[voxel_count_]);
+    if (const std::optional<BlockBox> box = dense_block_box(keys, 0, kDenseCellsPerBlock)) dense_.use_box(*box);
+    else dense_.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) dense_.try_emplace(keys[i], static_cast<std::uint32_t>(i));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            pack(i);
+            state_[i].store(kPacked, std::memory_order_release);
+        }
+    });
+}
+
 void PackedVoxels::build_dense_table() {
     // The windows of a frame look blocks up ~150k times (KITTI 000000), mostly blocks near the
     // data. A lidar frame's blocks fill 3-5 % of their bounding box (a disc ten blocks thick:
@@ -47,11 +72,12 @@ void PackedVoxels::build_dense_table() {
 void PackedVoxels::pack(std::size_t b) const {
     const VoxelGrid& grid = *grid_;
     Block& block = blocks_[b];
+    const std::size_t in_grid = subset_ ? grid_blocks_[b] : b;  // the block's creation index in the grid
     block.voxels = voxels_.get() + start_[b];
-    block.occupancy = &grid.occupancy(b);
+    block.occupancy = &grid.occupancy(in_grid);
     block.layers = 0;
     for (int z = 0; z < 8; ++z) block.layers |= static_cast<std::uint8_t>(((*block.occupancy)[static_cast<std::size_t>(z)] != 0) << z);
-    const auto& index = grid.index().block_at(b);
+    const auto& index = grid.index().block_at(in_grid);
     Voxel* out = voxels_.get() + start_[b];
     int rank = 0;
     for (int row = 0; row < 64; ++row) {

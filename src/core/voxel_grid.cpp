@@ -31,13 +31,17 @@ VoxelGrid::VoxelGrid(double alpha, const std::optional<Eigen::Vector3d>& origin)
 }
 
 std::string VoxelGrid::out_of_range_message(const Eigen::Vector3d& world, std::optional<std::size_t> index) const {
+    return out_of_range_message(world, index, origin_);
+}
+
+std::string VoxelGrid::out_of_range_message(const Eigen::Vector3d& world, std::optional<std::size_t> index, const Eigen::Vector3d& origin) const {
     char which[32] = "";
     if (index) std::snprintf(which, sizeof which, "#%zu ", *index);
     char buf[320];
     std::snprintf(buf, sizeof buf,
                   "point %s(%.10g, %.10g, %.10g) is more than %d voxels (%.6g m) from the first point (%.10g, %.10g, %.10g); "
                   "split the cloud, drop the outlier, or use a larger voxel size",
-                  which, world.x(), world.y(), world.z(), kMaxLatticeIndex, kMaxLatticeIndex * alpha_, origin_.x(), origin_.y(), origin_.z());
+                  which, world.x(), world.y(), world.z(), kMaxLatticeIndex, kMaxLatticeIndex * alpha_, origin.x(), origin.y(), origin.z());
     return buf;
 }
 
@@ -71,6 +75,31 @@ void VoxelGrid::cache_block(const VoxelKey& block_key) {
     last_block_key_ = block_key;
 }
 
+namespace {
+constexpr std::uint32_t kNoChange = 0xffffffffu;
+}
+
+void VoxelGrid::track_changes() {
+    if (tracking_) return;
+    tracking_ = true;
+    change_slot_.assign(occupancy_.size(), kNoChange);
+}
+
+VoxelGrid::BlockChange& VoxelGrid::change_of(std::uint32_t b) {
+    if (b >= change_slot_.size()) change_slot_.resize(std::max<std::size_t>(b + 1, occupancy_.size()), kNoChange);
+    std::uint32_t& slot = change_slot_[b];
+    if (slot == kNoChange) {
+        slot = static_cast<std::uint32_t>(changes_.size());
+        changes_.push_back({b, 0, 0, 0, 0});
+    }
+    return changes_[slot];
+}
+
+std::vector<VoxelGrid::BlockChange> VoxelGrid::take_changes() {
+    for (const BlockChange& c : changes_) change_slot_[c.block] = kNoChange;
+    return std::exchange(changes_, {});
+}
+
 void VoxelGrid::touch(std::uint32_t b) {
     if (!touched_flag_[b]) {
         touched_flag_[b] = 1;
@@ -90,6 +119,11 @@ std::size_t VoxelGrid::remove(std::size_t voxel) {
     *slot = -1;
     occupancy_[block][static_cast<std::size_t>(offset >> 6)] &= ~(std::uint64_t{1} << (offset & 63));
     touch(block);
+    if (tracking_) {
+        BlockChange& c = change_of(block);
+        ++c.removed_voxels;
+        c.removed_points += stats_[voxel].count;
+    }
     const std::size_t last = keys_.size() - 1;
     if (voxel != last) {
         *slot_of(keys_[last]).first = static_cast<std::int32_t>(voxel);
@@ -119,12 +153,26 @@ std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
 void VoxelGrid::insert(const Eigen::Vector3d& world) {
     if (!world.allFinite()) throw InvalidInput("point coordinates must be finite");
     if (viewpoints_enabled_) throw InvalidArgument("this grid has viewpoints: insert points with the position they were seen from");
+    // The origin is kept only once the point is taken: a point out of range leaves no trace.
+    const Eigen::Vector3d origin = origin_set_ ? origin_ : lattice_point_near(world, alpha_);
+    VoxelKey key;
+    try {
+        key = key_of_local(world - origin);
+    } catch (const InvalidInput&) {
+        throw InvalidInput(out_of_range_message(world, std::nullopt, origin));
+    }
     set_origin_from(world);
     const Eigen::Vector3d local = world - origin_;
-    const auto v = static_cast<std::size_t>(voxel_index(key_of_local(local)));
+    const std::size_t before = keys_.size();
+    const auto v = static_cast<std::size_t>(voxel_index(key));
     if (v >= stats_.size()) stats_.resize(v + 1);
     stats_[v].add(local);
     ++points_;
+    if (tracking_) {
+        BlockChange& c = change_of(static_cast<std::uint32_t>(index_.index_of(BlockMap<std::int32_t>::block_of(key))));
+        ++c.points;
+        c.new_voxels += keys_.size() > before;
+    }
 }
 
 std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint,
@@ -138,8 +186,9 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
         if (hits) hits->clear();
         return n;
     }
-    set_origin_from(points[first]);
-    // 1. The voxel key of every point, in parallel; a point out of range throws before any change.
+    // 1. The voxel key of every point, in parallel; a point out of range throws before any change
+    //    (the lattice origin a first batch would set included: a refused batch leaves no trace).
+    const Eigen::Vector3d origin = origin_set_ ? origin_ : lattice_point_near(points[first], alpha_);
     constexpr std::uint32_t kSkip = 0xffffffffu;
     std::vector<VoxelKey> keys(n);
     std::vector<std::uint8_t> finite(n);
@@ -149,7 +198,7 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
             finite[i] = points[i].allFinite();
             if (!finite[i]) continue;
             try {
-                keys[i] = key_of_local(points[i] - origin_);
+                keys[i] = key_of_local(points[i] - origin);
             } catch (const InvalidInput&) {
                 std::size_t seen = first_out_of_range.load();
                 while (i < seen && !first_out_of_range.compare_exchange_weak(seen, i)) {
@@ -160,7 +209,11 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                       [&](const auto& r) { call_at_simd_level(key_range, r.begin(), r.end()); });
-    if (const std::size_t bad = first_out_of_range.load(); bad < n) throw InvalidInput(out_of_range_message(points[bad], bad));
+    if (const std::size_t bad = first_out_of_range.load(); bad < n) {
+        throw InvalidInput(out_of_range_message(points[bad], bad, origin));
+    }
+    set_origin_from(points[first]);
+    const std::size_t voxels_before = keys_.size();
     // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).
     //    Without a branch on whether the voxel is new (as likely as not on a lidar frame, so
@@ -243,6 +296,19 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
         hits->reserve(runs.size() - 1);
         for (std::size_t run = 0; run + 1 < runs.size(); ++run)
             hits->push_back({voxel[order[runs[run]]], order[runs[run]]});
+    }
+    if (tracking_) {
+        // Runs come by voxel number: new voxels in first-point order, so mostly block after block.
+        std::int64_t block = -1;
+        VoxelKey block_key = VoxelKey::Zero();
+        for (std::size_t run = 0; run + 1 < runs.size(); ++run) {
+            const std::uint32_t v = voxel[order[runs[run]]];
+            const VoxelKey key = BlockMap<std::int32_t>::block_of(keys_[v]);
+            if (block < 0 || !same_key(key, block_key)) block = index_.index_of(block_key = key);
+            BlockChange& c = change_of(static_cast<std::uint32_t>(block));
+            c.points += static_cast<std::uint32_t>(runs[run + 1] - runs[run]);
+            c.new_voxels += v >= voxels_before;
+        }
     }
     points_ += n - dropped;
     return dropped;

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include <Eigen/Geometry>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -175,6 +176,11 @@ public:
     const Mesh& mesh() const { return mesh_; }
     /// Lattice identity of each mesh vertex, in creation order (axis 4: a loop centroid).
     const std::vector<VertexId>& vertex_ids() const { return vertex_ids_; }
+    /// Empties the welding slots this builder wrote, so that another builder can use the table.
+    void release_welds() {
+        for (const VertexId& id : vertex_ids_)
+            if (id.axis <= 3) ids_[index_of(*field_.find(id.base))][static_cast<std::size_t>(id.axis)] = kNone;
+    }
     /// Mesh index of the vertex with identity `id` (axis 0 to 3), or kNone.
     std::uint32_t find(const VertexId& id) const {
         const VertexSample* s = field_.find(id.base);
@@ -382,6 +388,21 @@ Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes, Ve
         }
         for (std::size_t t = 0; t < m.triangles.size(); ++t)
             for (int k = 0; k < 3; ++k) out.triangles[triangle_base[r] + t][static_cast<std::size_t>(k)] = g[m.triangles[t][static_cast<std::size_t>(k)]];
+    });
+    return out;
+}
+
+std::vector<Mesh> extract_meshes(const TsdfField& field, const std::vector<VoxelKey>& cubes, std::span<const std::size_t> starts,
+                                 VertexPlacement placement) {
+    const std::size_t groups = starts.empty() ? 0 : starts.size() - 1;
+    std::vector<Mesh> out(groups);
+    // One welding table per thread, emptied after each group (what the group wrote, not the table).
+    tbb::enumerable_thread_specific<WeldTable> tables([&] { return empty_weld_table(field); });
+    tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
+        MeshBuilder builder(field, placement, tables.local());
+        mesh_cubes(builder, cubes.data() + starts[g], cubes.data() + starts[g + 1]);
+        builder.release_welds();
+        out[g] = builder.take();
     });
     return out;
 }

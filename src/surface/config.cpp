@@ -86,6 +86,12 @@ void ReconstructionConfig::validate() const {
     if (!std::isfinite(carve_range) || carve_range <= 0 || carve_range > 1e4)
         fail("carve range must be within (0, 1e4] m (got " + format_value(carve_range) + ")");
     if (carve_min_scans < 1 || carve_min_scans > 65535) fail("carve min scans must be in [1, 65535] (got " + format_value(carve_min_scans) + ")");
+    if (!std::isfinite(live_growth) || live_growth < 0 || live_growth > 1e3)
+        fail("live growth must be within [0, 1e3] (got " + format_value(live_growth) + ")");
+    if (!std::isfinite(live_range) || live_range <= 0 || live_range > 1e4)
+        fail("live range must be within (0, 1e4] m (got " + format_value(live_range) + ")");
+    if (live_reach_blocks < 0 || live_reach_blocks > 4) fail("live reach blocks must be in [0, 4] (got " + format_value(live_reach_blocks) + ")");
+    if (live_halo_cubes < 0 || live_halo_cubes > 64) fail("live halo cubes must be in [0, 64] (got " + format_value(live_halo_cubes) + ")");
     if (threads < 0 || threads > 1024) fail("threads must be in [0, 1024] (got " + format_value(threads) + ")");
 }
 

@@ -26,6 +26,7 @@
 #include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/cube.hpp"
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/surface/neighbourhood_window.hpp"
 #include "lidarsurf/surface/vertex_evaluator.hpp"
@@ -113,9 +114,12 @@ void classify_cube(const VoxelKey& cube, bool seeding, double eps, const CornerV
 // The breadth-first search over cubes, independent of how vertex values are obtained.
 class CubeSearch {
 public:
-    explicit CubeSearch(const VoxelGrid& grid) : eps_(1e-6 * grid.voxel_size()), seen_of_(visited_) {
-        visited_.reserve_blocks(grid.index().block_count() * 2);
+    /// `blocks`: about how many blocks of cubes the search will visit (a reservation).
+    CubeSearch(const VoxelGrid& grid, std::size_t blocks, const SearchRegion* region = nullptr)
+        : eps_(1e-6 * grid.voxel_size()), seen_of_(visited_), region_(region) {
+        visited_.reserve_blocks(blocks);
     }
+    explicit CubeSearch(const VoxelGrid& grid) : CubeSearch(grid, grid.index().block_count() * 2) {}
     /// How many cubes ahead of the one it examines a wave's chunk asks its view to prefetch.
     static constexpr std::size_t kPrefetchAhead = 2;
     double eps() const { return eps_; }
@@ -157,6 +161,7 @@ public:
         classify_cube(
             cube, seeding, eps_, s, [&](const VoxelKey& a) { out.active.push_back(a); },
             [&](const VoxelKey& n) {
+                if (region_ && !region_->contains(n)) return;  // the search is kept to the region
                 const std::uint8_t* flag = seen.find(n);
                 if (!flag)
                     out.deferred.push_back(n);
@@ -236,6 +241,7 @@ private:
     double eps_;
     BlockMap<std::uint8_t> visited_{0};
     BlockMap<std::uint8_t>::WriteAccessor seen_of_;
+    const SearchRegion* region_;
     std::vector<VoxelKey> wave_, active_;
     double seconds_parallel_ = 0, seconds_serial_ = 0;
 };
@@ -527,38 +533,105 @@ std::uint64_t defined_bits(const std::int32_t* slots) {
 
 }  // namespace
 
+namespace {
+// The grid blocks a region's windows read (creation indices, each once): those within `reach`
+// blocks of a vertex block of the region's cubes (a region block or the next one along some axes).
+std::vector<std::uint32_t> blocks_read_by(const VoxelGrid& grid, const SearchRegion& region, int reach) {
+    BlockIndex seen;
+    std::vector<std::uint32_t> out;
+    for (const VoxelKey& block : region.blocks())
+        for (int z = -reach; z <= reach + 1; ++z)
+            for (int y = -reach; y <= reach + 1; ++y)
+                for (int x = -reach; x <= reach + 1; ++x) {
+                    const std::int64_t b = grid.index().index_of(block + VoxelKey(x, y, z));
+                    if (b >= 0 && seen.try_emplace(VoxelKey(x, y, z) + block, 0).second) out.push_back(static_cast<std::uint32_t>(b));
+                }
+    return out;
+}
+}  // namespace
+
+SearchRegion SearchRegion::around(std::span<const VoxelKey> core, int halo) {
+    constexpr int B = BlockMap<std::int32_t>::kSize;
+    const int rings = (std::max(halo, 0) + B - 1) / B;
+    SearchRegion region;
+    BlockMask full;
+    full.fill(~std::uint64_t{0});
+    for (const VoxelKey& block : core) region.add(block, full);
+    if (halo <= 0) return region;
+    for (const VoxelKey& block : core)
+        for (int dz = -rings; dz <= rings; ++dz)
+            for (int dy = -rings; dy <= rings; ++dy)
+                for (int dx = -rings; dx <= rings; ++dx) {
+                    // Cube u (relative to the core block's first) is within the halo when
+                    // -halo <= u <= 7 + halo on every axis: in block d, offsets [lo, hi].
+                    int lo[3], hi[3];
+                    const int d[3] = {dx, dy, dz};
+                    bool empty = false;
+                    for (int a = 0; a < 3; ++a) {
+                        lo[a] = std::max(0, -halo - B * d[a]);
+                        hi[a] = std::min(B - 1, B - 1 + halo - B * d[a]);
+                        empty = empty || lo[a] > hi[a];
+                    }
+                    if (empty || (dx == 0 && dy == 0 && dz == 0)) continue;
+                    BlockMask mask{};
+                    const std::uint64_t layer = layer_mask(lo[0], hi[0], lo[1], hi[1]);
+                    for (int z = lo[2]; z <= hi[2]; ++z) mask[static_cast<std::size_t>(z)] = layer;
+                    region.add(block + VoxelKey(dx, dy, dz), mask);
+                }
+    return region;
+}
+
+void SearchRegion::add(const VoxelKey& block, const BlockMask& mask) {
+    const auto [i, added] = index_.try_emplace(block, static_cast<std::uint32_t>(blocks_.size()));
+    if (added) {
+        blocks_.push_back(block);
+        masks_.push_back(mask);
+        return;
+    }
+    for (std::size_t z = 0; z < mask.size(); ++z) masks_[i][z] |= mask[z];
+}
+
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
-                               EigenSolver solver, const TsdfField* previous) {
+                               EigenSolver solver, const TsdfField* previous, const SearchRegion* region) {
     config.validate();
+    if (previous && region) throw InvalidArgument("compute_seeded_tsdf: a region search does not reuse a previous field");
     SeededTiming timing;
     auto t0 = Clock::now();
     // A window of vertex block b reads the voxel blocks within ceil(max_reach / 8) of b.
     const int reach = (config.max_reach() + BlockMap<std::int32_t>::kSize - 1) / BlockMap<std::int32_t>::kSize;
     const DirtyRegion dirty = previous ? dirty_region(grid, reach) : DirtyRegion{};
+    // What the search can visit: the grid's blocks, or the region's.
+    const std::size_t search_blocks = region ? region->blocks().size() : grid.index().block_count();
     using Slots = CornerEvaluator::Slots;
     Slots slots(CornerEvaluator::kUnevaluated);
-    slots.reserve_blocks(grid.index().block_count() * 2);
+    slots.reserve_blocks(search_blocks * 2);
     // The search's vertex and cube blocks lie within `reach` blocks of the voxel blocks (one more
     // for a cube's far corners): through a dense table of that box, when it is small (a frame's
     // is ~100k cells, 0.4 MB; the hash, which the blocks outside it use, probed ~300k times per
-    // KITTI frame).
+    // KITTI frame). A region's lie within one block of its blocks.
     const std::optional<BlockBox> search_box =
-        dense_block_box(grid.index().block_keys(), reach + 1, PackedVoxels::kDenseCellsPerBlock, std::size_t{1} << 21);
+        region ? dense_block_box(region->blocks(), 1, PackedVoxels::kDenseCellsPerBlock, std::size_t{1} << 21)
+               : dense_block_box(grid.index().block_keys(), reach + 1, PackedVoxels::kDenseCellsPerBlock, std::size_t{1} << 21);
     if (search_box) slots.use_box(*search_box);
+    std::size_t region_voxels = 0;
+    if (region)
+        for (const VoxelKey& b : region->blocks())
+            if (const std::int64_t i = grid.index().index_of(b); i >= 0) region_voxels += static_cast<std::size_t>(popcount(grid.occupancy(static_cast<std::size_t>(i))));
     EvaluatedStore defined_vertices;
     // ~3 per occupied voxel on lidar frames (more grows it). One block reserved up front costs
     // page faults only where written, and avoids the growth's smaller blocks (measured: 10k more
     // page faults per 16 frames without it); capped so a huge grid does not reserve gigabytes.
-    defined_vertices.reserve(std::min<std::size_t>(4 * grid.size(), std::size_t{1} << 22));
+    defined_vertices.reserve(std::min<std::size_t>(4 * (region ? region_voxels : grid.size()), std::size_t{1} << 22));
     std::atomic<std::size_t> evaluated{0}, reused{0};
     tbb::enumerable_thread_specific<StoreRun> runs;
     tbb::enumerable_thread_specific<NeighbourhoodWindow::ListArena> arenas;  // before `lists`: destroyed after it
     BlockLists lists;
-    const PackedVoxels packed(grid, previous ? &dirty.eager_blocks : nullptr);
+    const PackedVoxels packed = region ? PackedVoxels(grid, blocks_read_by(grid, *region, reach))
+                                       : PackedVoxels(grid, previous ? &dirty.eager_blocks : nullptr);
     const CornerEvaluator::Shared shared{slots, packed, config, grid.to_local(sensor_world), solver, truncation_of(config, grid),
                                          defined_vertices, evaluated, previous, dirty.vertex_blocks, reused, runs,
                                          lists, arenas};
-    CubeSearch search(grid);
+    CubeSearch search(grid, search_blocks * 2, region);
     if (search_box) search.visited().use_box(*search_box);
     // One evaluator per thread, for every task and wave: its windows (and their voxel lists and
     // level buffers) stay built from one task to the next.
@@ -575,7 +648,17 @@ SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig
     // cubes it leads to are visited serially, in block order.
     const int d = config.seed_dilation;
     {
-        std::vector<MaskedBlock> seeds = dilated_occupancy(grid, -d, d);
+        std::vector<MaskedBlock> seeds;
+        if (region) {
+            for (std::size_t i = 0; i < region->blocks().size(); ++i) {
+                BlockMask mask = dilated_occupancy(grid, region->blocks()[i], -d, d);
+                bool any = false;
+                for (std::size_t z = 0; z < mask.size(); ++z) any |= (mask[z] &= region->mask(i)[z]) != 0;
+                if (any) seeds.push_back({region->blocks()[i], mask});
+            }
+        } else {
+            seeds = dilated_occupancy(grid, -d, d);
+        }
         // In Morton order of the block keys, so that the blocks a task takes (and the two
         // threads' ranges) are compact in space and share the voxel records their windows read.
         {

@@ -37,6 +37,8 @@ expect 2 "imls: radius" -- "$cli" reconstruct "$dir/scan.bin" -o "$dir/x.ply" --
 expect 0 "F-score" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --json "$dir/m.json" --max-range 30
 grep -q '"ae_sym"' "$dir/m.json" || { echo "FAIL: evaluate --json wrote no metrics"; fail=$((fail + 1)); }
 expect 0 "hold-out 0.5.*held out" -- "$cli" evaluate --holdout 0.5 "$dir/scan.bin" --seed 3 --mesh-out "$dir/ho.ply"
+expect 2 "mesh-out writes the mesh of the kept points" -- "$cli" evaluate "$dir/mesh.ply" "$dir/gt.bin" --mesh-out "$dir/ho2.ply"
+[ ! -e "$dir/ho2.ply" ] || { echo "FAIL: evaluate --mesh-out without --holdout wrote a file"; fail=$((fail + 1)); }
 [ -s "$dir/ho.ply" ] || { echo "FAIL: --mesh-out not written"; fail=$((fail + 1)); }
 # The ring hold-out: the simulator writes column after column, so the scan is stored again ring
 # after ring (as KITTI does), and once more with each point's ring as a fifth value (as nuScenes does).
@@ -94,6 +96,16 @@ expect 3 "no 'Tr:' line" -- "$cli" fuse "$seq" -o "$dir/x.ply" --calib "$dir/cal
 expect 2 "first 5: the sequence has 2 scans" -- "$cli" fuse "$seq" -o "$dir/x.ply" --first 5
 expect 2 "step" -- "$cli" fuse "$seq" -o "$dir/x.ply" --step 0
 expect 2 "IMLS" -- "$cli" fuse "$seq" -o "$dir/x.ply" --method imls
+# The live mesh: per-frame update times, delta and live triangle counts and the staleness check in
+# the report; the output is the exact mesh, byte for byte the one fuse writes without --live.
+expect 0 "2 frames fused" -- "$cli" fuse "$seq" -o "$dir/fused_live.ply" --live --live-budget-ms 5 --live-check-every 1 --json "$dir/live.json"
+check "fuse --live writes the exact mesh" -- cmp -s "$dir/fused_live.ply" "$dir/fused_plain.ply"
+for key in update_ms delta_triangles live_triangles pending_blocks covered_share update_ms_p90 staleness_median; do
+  grep -q "\"$key\"" "$dir/live.json" || { echo "FAIL: fuse --live --json has no $key"; fail=$((fail + 1)); }
+done
+expect 2 "seeded surface" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live --method paper
+expect 2 "add --live" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live-check-every 5
+expect 2 "live growth" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live --live-growth -1
 expect 4 "velodyne|cannot|no such" -- "$cli" fuse "$dir/nothere" -o "$dir/x.ply"
 mkdir -p "$dir/short/velodyne" && cp "$seq"/velodyne/*.bin "$dir/short/velodyne/" && head -1 "$seq/poses.txt" > "$dir/short/poses.txt"
 expect 3 "1 poses for 2 scans" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
@@ -135,6 +147,11 @@ head -c 4 "$dir/mesh.png" | grep -q "PNG" || { echo "FAIL: render wrote no PNG";
 expect 0 "simulated .* points" -- "$cli" simulate --scene offroad --sensor vlp16 --length 100 -o "$dir/off.bin" --gt "$dir/off_gt.bin" --gt-beams 32
 printf '{"beams": 8, "elevation_max_deg": 5, "elevation_min_deg": -20, "azimuth_step_deg": 1}' > "$dir/s.json"
 expect 0 "simulated 1 frames" -- "$cli" simulate --scene town --sensor "$dir/s.json" --frames 1 --length 100 -o "$dir/seq_json"
+# A view that sees nothing (nothing within 1.2 m of a sensor 1.73 m above the ground): refused, no file.
+printf '{"beams": 8, "elevation_max_deg": 5, "elevation_min_deg": -20, "azimuth_step_deg": 1, "max_range": 1.2}' > "$dir/blind.json"
+expect 3 "sees nothing" -- "$cli" simulate --scene demo --sensor "$dir/blind.json" -o "$dir/blind.bin"
+expect 3 "sees nothing" -- "$cli" simulate --scene town --sensor "$dir/blind.json" --length 100 -o "$dir/blind.bin"
+[ ! -e "$dir/blind.bin" ] || { echo "FAIL: simulate wrote a scan of a view that sees nothing"; fail=$((fail + 1)); }
 expect 2 "unknown scene" -- "$cli" simulate --scene city -o "$dir/x"
 expect 2 "unknown sensor" -- "$cli" simulate --sensor hdl65 -o "$dir/x"
 printf '{"beams": 8' > "$dir/bad.json"

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
@@ -357,4 +358,74 @@ TEST(VoxelGrid, RemoveLeavesTheGridOfTheOtherVoxelsAndHitsNameEachVoxelsFirstPoi
     grid.insert(std::vector<Eigen::Vector3d>{p}, Eigen::Vector3d(1, 2, 3));
     ASSERT_NE(grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)}), nullptr);
     EXPECT_EQ(grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)})->count, 1u);
+}
+
+// The journal (VoxelGrid::take_changes) against a brute-force count per block: points inserted
+// in batches and one by one, new voxels, and removals with the points they held.
+TEST(VoxelGrid, TheJournalCountsEveryChangeOfEveryBlock) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-3.0, 3.0);
+    VoxelGrid grid(0.2, Eigen::Vector3d::Zero());
+    grid.track_changes();
+    std::map<KeyTuple, std::array<std::uint64_t, 4>> expected;  // per block: points, new voxels, removed voxels, removed points
+    std::set<KeyTuple> voxels;
+    auto block_of = [](const VoxelKey& v) {
+        const VoxelKey b = BlockMap<std::int32_t>::block_of(v);
+        return KeyTuple{b.x(), b.y(), b.z()};
+    };
+    auto key_of = [](const Eigen::Vector3d& p) {
+        return VoxelKey(int(std::floor(p.x() / 0.2)), int(std::floor(p.y() / 0.2)), int(std::floor(p.z() / 0.2)));
+    };
+    for (int round = 0; round < 3; ++round) {
+        std::vector<Eigen::Vector3d> batch;
+        for (int i = 0; i < 4000; ++i) batch.emplace_back(u(rng), u(rng), 0.3 * u(rng));
+        for (const Eigen::Vector3d& p : batch) {
+            const VoxelKey k = key_of(p);
+            auto& e = expected[block_of(k)];
+            ++e[0];
+            e[1] += voxels.insert({k.x(), k.y(), k.z()}).second;
+        }
+        grid.insert(batch);
+        const Eigen::Vector3d one(u(rng), u(rng), u(rng));
+        const VoxelKey k1 = key_of(one);
+        grid.insert(one);
+        ++expected[block_of(k1)][0];
+        expected[block_of(k1)][1] += voxels.insert({k1.x(), k1.y(), k1.z()}).second;
+        // Remove the voxel with index 5 (its block loses it and its points).
+        const VoxelKey gone = grid.keys()[5];
+        auto& e = expected[block_of(gone)];
+        ++e[2];
+        e[3] += grid.stats()[5].count;
+        voxels.erase({gone.x(), gone.y(), gone.z()});
+        grid.remove(5);
+        std::map<KeyTuple, std::array<std::uint64_t, 4>> got;
+        for (const VoxelGrid::BlockChange& c : grid.take_changes()) {
+            const VoxelKey b = grid.index().block_keys()[c.block];
+            ASSERT_EQ(got.count({b.x(), b.y(), b.z()}), 0u) << "a block listed twice";
+            got[{b.x(), b.y(), b.z()}] = {c.points, c.new_voxels, c.removed_voxels, c.removed_points};
+        }
+        EXPECT_EQ(got, expected) << "round " << round;
+        expected.clear();
+        EXPECT_TRUE(grid.take_changes().empty());
+    }
+}
+
+// A batch refused for spanning too far (its first point 1e7 m away) leaves no lattice origin: the
+// next batch is taken as if it came first.
+TEST(VoxelGrid, ARefusedBatchLeavesNoOrigin) {
+    std::vector<Eigen::Vector3d> batch{{1e7, 0, 0}, {0.1, 0.2, 0.3}, {1.0, 1.0, 1.0}};
+    VoxelGrid grid(0.2), fresh(0.2);
+    EXPECT_THROW(grid.insert(batch), InvalidInput);
+    EXPECT_FALSE(grid.has_origin());
+    VoxelGrid single(0.2);
+    single.insert(Eigen::Vector3d(0.5, 0.5, 0.5));
+    EXPECT_THROW(single.insert(Eigen::Vector3d(1e7, 0, 0)), InvalidInput);
+    EXPECT_EQ(single.size(), 1u);
+    const std::vector<Eigen::Vector3d> good(batch.begin() + 1, batch.end());
+    VoxelGrid after(0.2);
+    EXPECT_THROW(after.insert(batch), InvalidInput);
+    after.insert(good);
+    fresh.insert(good);
+    EXPECT_EQ(after.origin(), fresh.origin());
+    EXPECT_EQ(after.size(), fresh.size());
 }

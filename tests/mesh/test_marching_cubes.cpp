@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
+#include <tuple>
 #include <random>
 
 #include <tbb/task_arena.h>
@@ -204,4 +206,40 @@ TEST(MarchingCubes, ParallelRunsGiveTheSerialMeshWhateverTheThreadCount) {
         return v;
     };
     EXPECT_EQ(sorted(serial.vertices), sorted(one.vertices));
+}
+
+// extract_meshes: each group's mesh is extract_mesh() of that group alone, whatever the threads
+// (the shared welding tables are emptied between groups).
+TEST(MarchingCubes, GroupsAreMeshedAsIfAlone) {
+    const TsdfField field = sample_field(0.1, 20, [](const Eigen::Vector3d& p) { return p.norm() - 1.33; });
+    std::vector<VoxelKey> cubes;
+    for (const VoxelKey& k : field.keys())
+        if (k.x() < 20 && k.y() < 20 && k.z() < 20) cubes.push_back(k);
+    // Groups: the cubes of each 8^3 block, blocks in the order of their first cube.
+    std::map<std::tuple<int, int, int>, std::vector<VoxelKey>> by_block;
+    for (const VoxelKey& k : cubes) {
+        const VoxelKey b = BlockMap<std::int32_t>::block_of(k);
+        by_block[{b.z(), b.y(), b.x()}].push_back(k);
+    }
+    std::vector<VoxelKey> grouped;
+    std::vector<std::size_t> starts{0};
+    std::vector<std::vector<VoxelKey>> groups;
+    for (const auto& [key, list] : by_block) {
+        grouped.insert(grouped.end(), list.begin(), list.end());
+        starts.push_back(grouped.size());
+        groups.push_back(list);
+    }
+    ASSERT_GT(groups.size(), 8u);
+    for (int threads : {1, 2}) {
+        tbb::task_arena arena(threads);
+        std::vector<Mesh> meshes;
+        arena.execute([&] { meshes = extract_meshes(field, grouped, starts); });
+        ASSERT_EQ(meshes.size(), groups.size());
+        std::size_t triangles = 0;
+        for (std::size_t g = 0; g < groups.size(); ++g) {
+            test::expect_identical(meshes[g], extract_mesh(field, groups[g]), "group " + std::to_string(g));
+            triangles += meshes[g].triangles.size();
+        }
+        EXPECT_EQ(triangles, extract_mesh(field, grouped).triangles.size());
+    }
 }

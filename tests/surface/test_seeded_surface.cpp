@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/sim/analytic_scene.hpp"
@@ -325,4 +326,66 @@ TEST(SeededSurface, PhaseTimesArePartsOfTheCall) {
     for (double phase : {t.setup, t.seed_wave, t.later_waves, t.serial, t.field}) EXPECT_GE(phase, 0.0);
     EXPECT_GT(t.seed_wave, 0.0);
     EXPECT_LE(t.setup + t.seed_wave + t.later_waves + t.serial + t.field, wall);
+}
+
+// SearchRegion::around against a brute-force Chebyshev distance to the core blocks' cubes.
+TEST(SearchRegion, AroundHoldsExactlyTheCubesWithinTheHalo) {
+    const std::vector<VoxelKey> core{{0, 0, 0}, {1, 0, 0}, {-2, 3, -1}};
+    for (int halo : {0, 1, 3, 8, 11}) {
+        const SearchRegion region = SearchRegion::around(core, halo);
+        for (int z = -24; z < 16; ++z)
+            for (int y = -10; y < 40; ++y)
+                for (int x = -30; x < 24; ++x) {
+                    int best = 1 << 20;
+                    for (const VoxelKey& b : core) {
+                        int d = 0;
+                        for (int a = 0; a < 3; ++a) {
+                            const int c = VoxelKey(x, y, z)[a], lo = 8 * b[a], hi = lo + 7;
+                            d = std::max(d, c < lo ? lo - c : (c > hi ? c - hi : 0));
+                        }
+                        best = std::min(best, d);
+                    }
+                    ASSERT_EQ(region.contains({x, y, z}), best <= halo) << x << " " << y << " " << z << " halo " << halo;
+                }
+    }
+}
+
+// A search kept to a region finds the unrestricted search's cubes inside it (a subset), with the
+// same values at their corners; a region holding every block finds all of them.
+TEST(SeededSurface, ARegionSearchIsTheUnrestrictedSearchInsideIt) {
+    sim::SimulatorConfig sc;
+    sc.gt_beams = 0;
+    const sim::Simulator simulator(sim::make_world(sim::SceneConfig{}), sc);
+    const PointCloud cloud = simulator.frame(37).scan;
+    const ReconstructionConfig c;
+    VoxelGrid grid(c.voxel_size);
+    grid.insert(cloud.points);
+    const SeededTsdf all = compute_seeded_tsdf(grid, c, Eigen::Vector3d::Zero());
+    // The blocks within 12 m of the sensor.
+    std::vector<VoxelKey> near;
+    for (const VoxelKey& b : grid.index().block_keys())
+        if ((grid.to_world((b.cast<double>() * 8 + Eigen::Vector3d::Constant(4)) * c.voxel_size)).norm() < 12) near.push_back(b);
+    ASSERT_GT(near.size(), 100u);
+    const SearchRegion region = SearchRegion::around(near, 2);
+    const SeededTsdf part = compute_seeded_tsdf(grid, c, Eigen::Vector3d::Zero(), EigenSolver::ClosedForm, nullptr, &region);
+    std::set<std::tuple<int, int, int>> cubes;
+    for (const VoxelKey& k : all.cubes) cubes.insert({k.x(), k.y(), k.z()});
+    std::size_t inside = 0;
+    for (const VoxelKey& k : all.cubes) inside += region.contains(k);
+    ASSERT_GT(part.cubes.size(), 0.99 * static_cast<double>(inside));
+    for (const VoxelKey& k : part.cubes) {
+        ASSERT_TRUE(region.contains(k));
+        ASSERT_EQ(cubes.count({k.x(), k.y(), k.z()}), 1u) << "a cube the unrestricted search does not find";
+        for (int corner = 0; corner < 8; ++corner) {
+            const VoxelKey v = k + corner_offset(corner);
+            ASSERT_TRUE(part.field.find(v) && all.field.find(v));
+            ASSERT_EQ(part.field.find(v)->tsdf, all.field.find(v)->tsdf);
+        }
+    }
+    // Every block, and every cube a surface can reach from them (a vertex is defined within
+    // max_reach of a voxel): the same cubes.
+    const SearchRegion whole = SearchRegion::around(grid.index().block_keys(), c.max_reach() + 1);
+    const SeededTsdf every = compute_seeded_tsdf(grid, c, Eigen::Vector3d::Zero(), EigenSolver::ClosedForm, nullptr, &whole);
+    EXPECT_EQ(every.cubes, all.cubes);
+    EXPECT_THROW(compute_seeded_tsdf(grid, c, Eigen::Vector3d::Zero(), EigenSolver::ClosedForm, &all.field, &whole), InvalidArgument);
 }

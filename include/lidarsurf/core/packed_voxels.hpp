@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "lidarsurf/core/voxel_grid.hpp"
@@ -59,12 +60,17 @@ public:
     /// meets them, by the thread that does (others needing it meanwhile wait). An incremental
     /// re-mesh packs the blocks near the new points up front and the few others it reads lazily.
     explicit PackedVoxels(const VoxelGrid& grid, const std::vector<std::uint8_t>* eager = nullptr);
+    /// Snapshot of the grid blocks `blocks` only (creation indices, each once), packed up front
+    /// in parallel: find() answers nullptr for every other block, as for an empty one. What a
+    /// region of a large map needs (SearchRegion), in time and memory that follow the region,
+    /// not the map.
+    PackedVoxels(const VoxelGrid& grid, std::span<const std::uint32_t> blocks);
 
     const VoxelGrid& grid() const { return *grid_; }
     /// The block with key `key`, or nullptr when it holds no voxel. Thread-safe.
     const Block* find(const VoxelKey& key) const {
         std::size_t i;
-        if (dense_.has_box()) {
+        if (subset_ || dense_.has_box()) {
             const std::uint32_t b = dense_.find(key);
             if (b == BlockIndex::kAbsent) return nullptr;
             i = b;
@@ -103,6 +109,10 @@ private:
     // The blocks' creation indices in a dense table of their box; without a box when the box is
     // too sparse (find() then probes the grid's index).
     BlockIndex dense_;
+    // Built from a subset of the blocks: dense_ (a box or a hash) maps their keys to their
+    // positions in the subset, and grid_blocks_ to their creation indices in the grid.
+    bool subset_ = false;
+    std::vector<std::uint32_t> grid_blocks_;
 };
 
 }  // namespace lidarsurf

@@ -128,8 +128,26 @@ public:
     const std::vector<std::uint32_t>& touched_blocks() const { return touched_; }
     void clear_touched();
 
+    /// What happened to one index block since the last take_changes(): the journal a live mesh
+    /// reads to decide what to re-mesh (map/block_changes.hpp), kept apart from touched_blocks()
+    /// so that the two consumers do not clear each other's record.
+    struct BlockChange {
+        std::uint32_t block = 0;           ///< creation index of index()
+        std::uint32_t points = 0;          ///< points inserted
+        std::uint32_t new_voxels = 0;      ///< voxels created
+        std::uint32_t removed_voxels = 0;  ///< voxels removed (remove())
+        std::uint64_t removed_points = 0;  ///< the points those voxels held
+    };
+    /// Starts the journal (off by default: a batch fusion pays nothing for it).
+    void track_changes();
+    bool tracks_changes() const { return tracking_; }
+    /// The blocks changed since the last call (or since track_changes()), each once, in the order
+    /// they were first changed; empties the journal.
+    std::vector<BlockChange> take_changes();
+
 private:
     void set_origin_from(const Eigen::Vector3d& world);
+    std::string out_of_range_message(const Eigen::Vector3d& world, std::optional<std::size_t> index, const Eigen::Vector3d& origin) const;
     // for_each_in_box with the voxel's index into stats_ instead of its statistics.
     template <typename F>
     void for_each_index_in_box(const VoxelKey& lo, const VoxelKey& hi, F&& f) const;
@@ -147,6 +165,8 @@ private:
     // Makes block `block_key` (created if absent, marked touched) the cached last block.
     void cache_block(const VoxelKey& block_key);
     void touch(std::uint32_t block);
+    // The journal's entry of block b (created on first use).
+    BlockChange& change_of(std::uint32_t block);
 
     double alpha_;
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
@@ -160,6 +180,9 @@ private:
     std::vector<Occupancy> occupancy_;  // per index block, in creation order
     std::vector<std::uint8_t> touched_flag_;  // per index block: in touched_
     std::vector<std::uint32_t> touched_;
+    bool tracking_ = false;
+    std::vector<std::uint32_t> change_slot_;  // per index block when tracking: its entry in changes_, or kNoChange
+    std::vector<BlockChange> changes_;
     std::vector<VoxelKey> keys_;
     std::vector<VoxelStats> stats_;
     bool viewpoints_enabled_ = false;

@@ -7,6 +7,7 @@
 // surface is closed), the segments are chained into loops, and each loop is fanned into
 // triangles. Vertices are keyed by lattice edge, so shared vertices are welded. Triangles face
 // the positive side of the field (the sensor side of the TSDF).
+#include <span>
 #include <vector>
 
 #include "lidarsurf/mesh/mesh.hpp"
@@ -26,5 +27,11 @@ Mesh extract_mesh(const TsdfField& field, VertexPlacement placement = VertexPlac
 /// Meshes only the given cubes (by minimum corner), in the given order.
 Mesh extract_mesh(const TsdfField& field, const std::vector<VoxelKey>& cubes,
                   VertexPlacement placement = VertexPlacement::Interpolated);
+
+/// Meshes the cubes in groups, one mesh each: group g is cubes[starts[g], starts[g + 1]) and its
+/// mesh is the one extract_mesh(field, those cubes) gives (its vertices welded within the group).
+/// In parallel over the groups.
+std::vector<Mesh> extract_meshes(const TsdfField& field, const std::vector<VoxelKey>& cubes, std::span<const std::size_t> starts,
+                                 VertexPlacement placement = VertexPlacement::Interpolated);
 
 }  // namespace lidarsurf

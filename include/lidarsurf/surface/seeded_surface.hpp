@@ -10,9 +10,11 @@
 //    to rounding).
 #include <array>
 #include <cstddef>
+#include <span>
 #include <utility>
 #include <vector>
 
+#include "lidarsurf/core/block_mask.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
@@ -53,6 +55,32 @@ struct SeededTsdf {
     SeededTiming timing;
 };
 
+/// A part of the lattice the surface search is kept to: per 8^3 block of cubes, the mask of
+/// the cubes in it (cube i = the cube with minimum corner i, BlockMask layout). What a live mesh
+/// re-meshes of a large map: some blocks, and a margin of cubes around them so that the surface
+/// reaching them from their neighbours is found.
+class SearchRegion {
+public:
+    /// The blocks `core` (block keys) whole, and the cubes within `halo` cubes (Chebyshev
+    /// distance, >= 0) of them.
+    static SearchRegion around(std::span<const VoxelKey> core, int halo);
+    /// Adds the cubes of `mask` in block `block`.
+    void add(const VoxelKey& block, const BlockMask& mask);
+    bool contains(const VoxelKey& cube) const {
+        const std::uint32_t i = index_.find(BlockMap<std::int32_t>::block_of(cube));
+        if (i == BlockIndex::kAbsent) return false;
+        const int offset = BlockMap<std::int32_t>::offset_of(cube);
+        return (masks_[i][static_cast<std::size_t>(offset >> 6)] >> (offset & 63)) & 1u;
+    }
+    const std::vector<VoxelKey>& blocks() const { return blocks_; }
+    const BlockMask& mask(std::size_t i) const { return masks_[i]; }
+
+private:
+    BlockIndex index_;
+    std::vector<VoxelKey> blocks_;
+    std::vector<BlockMask> masks_;
+};
+
 /// The fast path: the same cubes and the same values at their corners (up to rounding) as
 /// compute_tsdf followed by seeded_cubes, evaluating only the vertices the search touches (each
 /// visited cube's corners lazily: its two probes, then the rest), in parallel per search wave,
@@ -67,7 +95,15 @@ struct SeededTsdf {
 /// voxel blocks the others can reach are packed up front, any other lazily. The result is the same as without
 /// `previous` (tests/test_pipeline.cpp). The search and the compaction still run over the
 /// whole surface.
+///
+/// `region`, when given, keeps the search to its cubes: the seeds are those of its cubes within
+/// seed_dilation of an occupied voxel, and a face leading out of it is not crossed. Time and
+/// memory then follow the region, not the grid; the values are the same as without it (a vertex's
+/// value depends on the voxels, not on the search), and the cubes found are those the search
+/// reaches without leaving the region (a subset of the unrestricted search's, equal to it when
+/// the region holds every cube the surface of its seeds runs through). Not with `previous`.
 SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
-                               EigenSolver solver = EigenSolver::ClosedForm, const TsdfField* previous = nullptr);
+                               EigenSolver solver = EigenSolver::ClosedForm, const TsdfField* previous = nullptr,
+                               const SearchRegion* region = nullptr);
 
 }  // namespace lidarsurf

@@ -1,4 +1,4 @@
-#include "lidarsurf/surface/free_space.hpp"
+#include "lidarsurf/map/free_space.hpp"
 
 #include <algorithm>
 #include <cmath>

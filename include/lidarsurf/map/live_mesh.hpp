@@ -1,0 +1,89 @@
+#pragma once
+// The live mesh of a fused map (docs/method.md, "Live mesh"): the map's surface kept per block
+// (the grid's 8^3 blocks of cubes) and brought up to date scan by scan, at a cost that follows
+// what the scan changed, not the map:
+//  - BlockChanges says which blocks are due (voxels removed near them, or points grown by a
+//    fraction since they were meshed);
+//  - the due blocks nearest the sensor are meshed first, in batches, until the time budget is
+//    spent; the others wait for the next updates, and those beyond live_range until the sensor
+//    comes back near them (the exact extraction has them all);
+//  - a batch is meshed as the exact extraction meshes the whole map (the same vertex values, the
+//    same marching cubes), with the surface search kept to the batch's blocks and a margin of
+//    cubes around them (SearchRegion): a surface that reaches a block only through cubes farther
+//    out is missing from the live mesh until the final extraction;
+//  - each update returns a MeshDelta: the blocks whose triangles changed, with their new mesh,
+//    and the blocks left without a triangle. Applying the deltas in order gives mesh().
+// The live mesh keeps every piece (the final extraction's min_component_triangles filter needs
+// the whole map). The exact mesh stays Reconstructor::extract_mesh().
+#include <cstddef>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/voxel_grid.hpp"
+#include "lidarsurf/map/block_changes.hpp"
+#include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/surface/config.hpp"
+
+namespace lidarsurf {
+
+/// One block of the live mesh: the grid block `key` (cubes 8 key to 8 key + 7) and the triangles
+/// of its cubes, in world coordinates, vertices welded within the block.
+struct MeshBlock {
+    VoxelKey key = VoxelKey::Zero();
+    Mesh mesh;
+};
+
+/// What one update changed.
+struct MeshDelta {
+    std::vector<MeshBlock> changed;  ///< blocks whose triangles changed, each with its whole new mesh
+    std::vector<VoxelKey> removed;   ///< blocks left without a triangle
+    std::size_t meshed_blocks = 0;   ///< blocks meshed by this update (their mesh changed or not)
+    std::size_t pending = 0;         ///< blocks due and left for later updates
+    double seconds = 0;              ///< the update's wall time
+    /// Triangles in `changed`.
+    std::size_t triangles() const;
+};
+
+class LiveMesh {
+public:
+    /// Throws InvalidArgument if `config` is invalid or meshes without the seeded surface (the
+    /// paper as written meshes every defined cube of the map: there is no block-local form of it).
+    explicit LiveMesh(const ReconstructionConfig& config);
+
+    /// Reads what changed in `grid` since the last call (the first call starts the grid's
+    /// journal and takes every block it holds as changed).
+    void record(VoxelGrid& grid);
+    /// Meshes the due blocks within live_range of `position` (world), nearest first, in batches, until
+    /// `budget_seconds` is spent (a batch is begun while some budget is left, so the first always
+    /// runs; <= 0: every due block). `sensor` orients the normals as in extract_mesh.
+    MeshDelta update(const VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds);
+
+    /// The live mesh: the blocks' meshes one after the other, blocks in (z, y, x) order of their
+    /// keys. Walks the whole map (for a viewer's first frame, a file, tests), unlike update().
+    Mesh mesh() const;
+    /// The blocks that have a triangle, with their meshes, in the order of mesh().
+    std::vector<MeshBlock> blocks() const;
+    std::size_t triangle_count() const { return triangles_; }
+    /// Blocks due and not meshed yet.
+    std::size_t pending() const { return changes_.due_count(); }
+    std::size_t memory_bytes() const;
+
+private:
+    ReconstructionConfig config_;
+    BlockChanges changes_;
+    bool started_ = false;
+    BlockIndex index_;              // block key -> blocks_
+    std::vector<MeshBlock> blocks_; // every block meshed so far (an empty mesh once it has none)
+    std::size_t triangles_ = 0;
+    double seconds_per_block_ = 0;  // a running mean, for the size of the next batch
+};
+
+/// Applies `delta` to a live mesh kept as blocks (key -> mesh): what a client of the updates
+/// (a viewer, a planner) does. Blocks in (z, y, x) key order.
+void apply(const MeshDelta& delta, std::vector<MeshBlock>& blocks);
+/// The blocks' meshes one after the other (as LiveMesh::mesh()).
+Mesh concatenate(const std::vector<MeshBlock>& blocks);
+
+}  // namespace lidarsurf

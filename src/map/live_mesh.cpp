@@ -1,0 +1,185 @@
+#include "lidarsurf/map/live_mesh.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <tuple>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
+
+namespace lidarsurf {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+const ReconstructionConfig& checked(const ReconstructionConfig& c) {
+    c.validate();
+    if (!c.seeded_surface)
+        throw InvalidArgument("the live mesh needs the seeded surface (the paper's method as written meshes every defined cube of the map)");
+    return c;
+}
+
+bool less_zyx(const VoxelKey& a, const VoxelKey& b) { return std::tie(a.z(), a.y(), a.x()) < std::tie(b.z(), b.y(), b.x()); }
+
+bool same_mesh(const Mesh& a, const Mesh& b) {
+    if (a.vertices.size() != b.vertices.size() || a.triangles.size() != b.triangles.size()) return false;
+    return std::equal(a.vertices.begin(), a.vertices.end(), b.vertices.begin()) &&
+           std::equal(a.triangles.begin(), a.triangles.end(), b.triangles.begin());
+}
+
+// Batches of due blocks: at least kMinBatch (one batch of a few blocks costs about as much as a
+// few more: the margin and the threads' start), at most kMaxBatch.
+constexpr std::size_t kMinBatch = 16, kMaxBatch = 1024;
+
+}  // namespace
+
+std::size_t MeshDelta::triangles() const {
+    std::size_t n = 0;
+    for (const MeshBlock& b : changed) n += b.mesh.triangles.size();
+    return n;
+}
+
+LiveMesh::LiveMesh(const ReconstructionConfig& config)
+    : config_(checked(config)), changes_(config.live_growth, config.live_reach_blocks) {}
+
+void LiveMesh::record(VoxelGrid& grid) {
+    if (!started_) {
+        started_ = true;
+        grid.track_changes();
+        changes_.record_all(grid);
+        grid.take_changes();  // already counted
+        return;
+    }
+    changes_.record(grid, grid.take_changes());
+}
+
+MeshDelta LiveMesh::update(const VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds) {
+    const auto t0 = Clock::now();
+    MeshDelta delta;
+    if (!grid.has_origin()) return delta;
+    // The due blocks, nearest first (their centres' distance to `position`).
+    constexpr int B = BlockMap<std::int32_t>::kSize;
+    const double alpha = grid.voxel_size();
+    const Eigen::Vector3d local = grid.to_local(position);
+    // The urgent ones (never meshed, or a voxel removed near them) first, then those whose points grew.
+    struct Due {
+        bool later;
+        double distance2;
+        VoxelKey key;
+    };
+    std::vector<Due> due;
+    for (const VoxelKey& key : changes_.due_near(local, alpha, config_.live_range))
+        due.push_back({!changes_.urgent(key), ((key.cast<double>() * B + Eigen::Vector3d::Constant(B / 2.0)) * alpha - local).squaredNorm(), key});
+    std::sort(due.begin(), due.end(), [](const Due& a, const Due& b) {
+        if (a.later != b.later) return b.later;
+        if (a.distance2 != b.distance2) return a.distance2 < b.distance2;
+        return less_zyx(a.key, b.key);
+    });
+
+    const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
+    std::size_t next = 0;
+    while (next < due.size()) {
+        const double spent = seconds_since(t0);
+        if (budget_seconds > 0 && next > 0 && spent >= budget_seconds) break;
+        std::size_t count = kMaxBatch;
+        if (budget_seconds > 0 && seconds_per_block_ > 0)
+            count = std::clamp(static_cast<std::size_t>((budget_seconds - spent) / seconds_per_block_), kMinBatch, kMaxBatch);
+        count = std::min(count, due.size() - next);
+        const auto tb = Clock::now();
+        std::vector<VoxelKey> core(count);
+        for (std::size_t i = 0; i < count; ++i) core[i] = due[next + i].key;
+        const SearchRegion region = SearchRegion::around(core, config_.live_halo_cubes);
+        const SeededTsdf seeded = compute_seeded_tsdf(grid, config_, sensor, EigenSolver::ClosedForm, nullptr, &region);
+        // The active cubes of each core block (the cubes come sorted (z, y, x), so each block's too).
+        BlockIndex position_of;
+        for (std::size_t i = 0; i < count; ++i) position_of.try_emplace(core[i], static_cast<std::uint32_t>(i));
+        std::vector<std::size_t> starts(count + 1, 0);
+        for (const VoxelKey& cube : seeded.cubes)
+            if (const std::uint32_t i = position_of.find(BlockMap<std::int32_t>::block_of(cube)); i != BlockIndex::kAbsent) ++starts[i + 1];
+        for (std::size_t i = 0; i < count; ++i) starts[i + 1] += starts[i];
+        std::vector<VoxelKey> cubes(starts[count]);
+        {
+            std::vector<std::size_t> at(starts.begin(), starts.end() - 1);
+            for (const VoxelKey& cube : seeded.cubes)
+                if (const std::uint32_t i = position_of.find(BlockMap<std::int32_t>::block_of(cube)); i != BlockIndex::kAbsent) cubes[at[i]++] = cube;
+        }
+        std::vector<Mesh> meshes = extract_meshes(seeded.field, cubes, starts, placement);
+        for (std::size_t i = 0; i < count; ++i) {
+            const VoxelKey& key = core[i];
+            changes_.mark_meshed(grid, key);
+            const auto [slot, added] = index_.try_emplace(key, static_cast<std::uint32_t>(blocks_.size()));
+            if (added) blocks_.push_back({key, Mesh{}});
+            Mesh& old = blocks_[slot].mesh;
+            if (meshes[i].triangles.empty()) meshes[i] = Mesh{};  // vertices whose triangles all had no area
+            if (same_mesh(old, meshes[i])) continue;
+            triangles_ = triangles_ - old.triangles.size() + meshes[i].triangles.size();
+            if (meshes[i].triangles.empty()) {
+                delta.removed.push_back(key);
+                old = Mesh{};
+            } else {
+                old = meshes[i];
+                delta.changed.push_back({key, std::move(meshes[i])});
+            }
+        }
+        // A running mean of the time per block, for the next batch's size.
+        const double per_block = seconds_since(tb) / static_cast<double>(count);
+        seconds_per_block_ = seconds_per_block_ > 0 ? 0.7 * seconds_per_block_ + 0.3 * per_block : per_block;
+        delta.meshed_blocks += count;
+        next += count;
+    }
+    delta.pending = changes_.due_count();
+    delta.seconds = seconds_since(t0);
+    return delta;
+}
+
+std::vector<MeshBlock> LiveMesh::blocks() const {
+    std::vector<MeshBlock> out;
+    for (const MeshBlock& b : blocks_)
+        if (!b.mesh.triangles.empty()) out.push_back(b);
+    std::sort(out.begin(), out.end(), [](const MeshBlock& a, const MeshBlock& b) { return less_zyx(a.key, b.key); });
+    return out;
+}
+
+Mesh LiveMesh::mesh() const { return concatenate(blocks()); }
+
+std::size_t LiveMesh::memory_bytes() const {
+    std::size_t bytes = changes_.memory_bytes() + index_.memory_bytes() + blocks_.capacity() * sizeof(MeshBlock);
+    for (const MeshBlock& b : blocks_) {
+        const Mesh& m = b.mesh;
+        bytes += m.vertices.capacity() * sizeof(Eigen::Vector3d) + m.triangles.capacity() * sizeof(m.triangles[0]) +
+                 m.normals.capacity() * sizeof(Eigen::Vector3f) + m.levels.capacity() + m.confidence.capacity() * sizeof(float);
+    }
+    return bytes;
+}
+
+void apply(const MeshDelta& delta, std::vector<MeshBlock>& blocks) {
+    auto find = [&](const VoxelKey& key) {
+        return std::lower_bound(blocks.begin(), blocks.end(), key, [](const MeshBlock& b, const VoxelKey& k) { return less_zyx(b.key, k); });
+    };
+    for (const VoxelKey& key : delta.removed)
+        if (auto it = find(key); it != blocks.end() && same_key(it->key, key)) blocks.erase(it);
+    for (const MeshBlock& block : delta.changed) {
+        auto it = find(block.key);
+        if (it != blocks.end() && same_key(it->key, block.key)) it->mesh = block.mesh;
+        else blocks.insert(it, block);
+    }
+}
+
+Mesh concatenate(const std::vector<MeshBlock>& blocks) {
+    Mesh out;
+    for (const MeshBlock& b : blocks) {
+        const Mesh& m = b.mesh;
+        const auto base = static_cast<std::uint32_t>(out.vertices.size());
+        out.vertices.insert(out.vertices.end(), m.vertices.begin(), m.vertices.end());
+        out.normals.insert(out.normals.end(), m.normals.begin(), m.normals.end());
+        out.levels.insert(out.levels.end(), m.levels.begin(), m.levels.end());
+        out.confidence.insert(out.confidence.end(), m.confidence.begin(), m.confidence.end());
+        for (const auto& t : m.triangles) out.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+    return out;
+}
+
+}  // namespace lidarsurf
