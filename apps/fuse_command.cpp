@@ -107,8 +107,7 @@ int run_fuse(const FuseOptions& o) {
     if (!o.live && o.live_check_every > 0) throw InvalidArgument("--live-check-every measures the live mesh: add --live");
     const Method m = resolve_method(o.reconstruct);
     if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
-    if (o.live && !m.config.seeded_surface)
-        throw InvalidArgument("--live needs the seeded surface: the paper's method as written meshes every defined cube of the whole map");
+    if (o.live) LiveMesh::check(m.config);  // before any scan is read
     const MeshFormat requested = parse_mesh_format(o.mesh_format);
     const KittiSequence seq{o.dir};
     const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
@@ -153,7 +152,10 @@ int run_fuse(const FuseOptions& o) {
         nlohmann::json row = {{"frame", i},
                               {"integrate_ms", 1e3 * (rec.summary().seconds_insert + rec.summary().seconds_carve - before)},
                               {"voxels", rec.summary().voxels}};
-        fresh = false;
+        // The exact mesh along the way: for --remesh-every, and for the live mesh's check (one
+        // extraction when both fall on this scan).
+        auto falls_here = [&](int every) { return every > 0 && ((n + 1) % static_cast<std::size_t>(every) == 0 || n + 1 == frames.size()); };
+        const bool remesh = falls_here(o.remesh_every), check = o.live && falls_here(o.live_check_every);
         if (o.live) {
             const MeshDelta delta = rec.update_mesh(o.live_budget_ms);
             const double update_ms = ms_since(t_update);
@@ -165,22 +167,20 @@ int run_fuse(const FuseOptions& o) {
             row["meshed_blocks"] = delta.meshed_blocks;
             row["pending_blocks"] = delta.pending;
             row["live_triangles"] = rec.live()->triangle_count();
-            if (o.live_check_every > 0 && ((n + 1) % static_cast<std::size_t>(o.live_check_every) == 0 || n + 1 == frames.size())) {
-                mesh = rec.extract_mesh();
-                fresh = true;
-                const Staleness st = measure_staleness(rec.live_mesh(), mesh, pose * m.sensor, kStalenessRadius, kStalenessTolerance);
-                stale_shares.push_back(st.share());
-                row["staleness"] = {{"share", st.share()},
-                                    {"live_area_m2", st.live_area},
-                                    {"stale_area_m2", st.stale_area},
-                                    {"exact_area_m2", st.exact_area},
-                                    {"covered_share", st.covered_share()}};
-            }
         }
         progress.update(n + 1, std::to_string(rec.summary().voxels) + " voxels");
-        if (o.remesh_every > 0 && ((n + 1) % static_cast<std::size_t>(o.remesh_every) == 0 || n + 1 == frames.size())) {
-            mesh = rec.extract_mesh();
-            fresh = true;
+        fresh = remesh || check;
+        if (fresh) mesh = rec.extract_mesh();
+        if (check) {
+            const Staleness st = measure_staleness(rec.live_mesh(), mesh, pose * m.sensor, kStalenessRadius, kStalenessTolerance);
+            stale_shares.push_back(st.share());
+            row["staleness"] = {{"share", st.share()},
+                                {"live_area_m2", st.live_area},
+                                {"stale_area_m2", st.stale_area},
+                                {"exact_area_m2", st.exact_area},
+                                {"covered_share", st.covered_share()}};
+        }
+        if (remesh) {
             const ReconstructionSummary& s = rec.summary();
             row["remesh_ms"] = 1e3 * (s.seconds_tsdf + s.seconds_mesh);
             std::fprintf(report, "frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",

@@ -153,16 +153,9 @@ std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
 void VoxelGrid::insert(const Eigen::Vector3d& world) {
     if (!world.allFinite()) throw InvalidInput("point coordinates must be finite");
     if (viewpoints_enabled_) throw InvalidArgument("this grid has viewpoints: insert points with the position they were seen from");
-    // The origin is kept only once the point is taken: a point out of range leaves no trace.
-    const Eigen::Vector3d origin = origin_set_ ? origin_ : lattice_point_near(world, alpha_);
-    VoxelKey key;
-    try {
-        key = key_of_local(world - origin);
-    } catch (const InvalidInput&) {
-        throw InvalidInput(out_of_range_message(world, std::nullopt, origin));
-    }
-    set_origin_from(world);
+    set_origin_from(world);  // a first point is never out of range: it sets the origin only when taken
     const Eigen::Vector3d local = world - origin_;
+    const VoxelKey key = key_of_local(local);
     const std::size_t before = keys_.size();
     const auto v = static_cast<std::size_t>(voxel_index(key));
     if (v >= stats_.size()) stats_.resize(v + 1);
@@ -209,10 +202,9 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
                       [&](const auto& r) { call_at_simd_level(key_range, r.begin(), r.end()); });
-    if (const std::size_t bad = first_out_of_range.load(); bad < n) {
-        throw InvalidInput(out_of_range_message(points[bad], bad, origin));
-    }
-    set_origin_from(points[first]);
+    if (const std::size_t bad = first_out_of_range.load(); bad < n) throw InvalidInput(out_of_range_message(points[bad], bad, origin));
+    origin_ = origin;
+    origin_set_ = true;
     const std::size_t voxels_before = keys_.size();
     // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).

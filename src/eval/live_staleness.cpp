@@ -32,38 +32,47 @@ Mesh crop(const Mesh& mesh, const Eigen::Vector3d& centre, double radius) {
         }
     return near;
 }
-// Area of the triangles of `mesh`, and of those whose centroid is within `tolerance` of
-// `other` (none when it is empty).
-std::pair<double, double> area_near(const Mesh& mesh, const Mesh& other, double tolerance) {
+// The area of the triangles of `mesh` whose centroid lies within `radius` of `centre`, and of
+// those among them whose centroid is within `tolerance` of `other` (none when it is empty), and
+// their count.
+struct Areas {
+    double inside = 0, near_other = 0;
+    std::size_t triangles = 0;
+};
+Areas areas(const Mesh& mesh, const Mesh& other, const Eigen::Vector3d& centre, double radius, double tolerance) {
     std::optional<MeshDistance> distance;
     if (!other.triangles.empty()) distance.emplace(other);
-    using Sum = std::pair<double, double>;
     return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 1024), Sum{0, 0},
-        [&](const auto& r, Sum acc) {
+        tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 1024), Areas{},
+        [&](const auto& r, Areas acc) {
             for (std::size_t t = r.begin(); t != r.end(); ++t) {
+                const Eigen::Vector3d c = centroid(mesh, t);
+                if ((c - centre).norm() > radius) continue;
                 const double area = mesh.triangle_area(t);
-                acc.first += area;
-                if (distance && distance->distance(centroid(mesh, t)) <= tolerance) acc.second += area;
+                acc.inside += area;
+                ++acc.triangles;
+                if (distance && distance->distance(c) <= tolerance) acc.near_other += area;
             }
             return acc;
         },
-        [](Sum a, const Sum& b) { return Sum{a.first + b.first, a.second + b.second}; });
+        [](Areas a, const Areas& b) { return Areas{a.inside + b.inside, a.near_other + b.near_other, a.triangles + b.triangles}; });
 }
 }  // namespace
 
 Staleness measure_staleness(const Mesh& live, const Mesh& exact, const Eigen::Vector3d& centre, double radius, double tolerance) {
     if (!(radius > 0) || !(tolerance >= 0) || !centre.allFinite()) throw InvalidArgument("measure_staleness: radius > 0, tolerance >= 0, a finite centre");
-    // A triangle within the tolerance of a centroid inside the radius lies within radius +
-    // tolerance + its own size (under a metre) of the centre.
+    // Each mesh cropped once, to what a centroid inside the radius can be within the tolerance of:
+    // a triangle within radius + tolerance + its own size (under a metre) of the centre.
     const double reach = radius + tolerance + 1.0;
-    const Mesh live_in = crop(live, centre, radius), exact_in = crop(exact, centre, radius);
+    const Mesh live_near = crop(live, centre, reach), exact_near = crop(exact, centre, reach);
+    const Areas of_live = areas(live_near, exact_near, centre, radius, tolerance);
+    const Areas of_exact = areas(exact_near, live_near, centre, radius, tolerance);
     Staleness s;
-    s.triangles = live_in.triangles.size();
-    const auto [live_area, fresh_area] = area_near(live_in, crop(exact, centre, reach), tolerance);
-    s.live_area = live_area;
-    s.stale_area = std::max(0.0, live_area - fresh_area);
-    std::tie(s.exact_area, s.covered_area) = area_near(exact_in, crop(live, centre, reach), tolerance);
+    s.triangles = of_live.triangles;
+    s.live_area = of_live.inside;
+    s.stale_area = std::max(0.0, of_live.inside - of_live.near_other);
+    s.exact_area = of_exact.inside;
+    s.covered_area = of_exact.near_other;
     return s;
 }
 

@@ -53,11 +53,6 @@ void BlockChanges::record_all(const VoxelGrid& grid) {
     record(grid, all);
 }
 
-bool BlockChanges::urgent(const VoxelKey& key) const {
-    const std::uint32_t i = index_.find(key);
-    return i != BlockIndex::kAbsent && (!states_[i].meshed || states_[i].removed_since > 0);
-}
-
 void BlockChanges::mark_meshed(const VoxelGrid& grid, const VoxelKey& key) {
     const std::uint64_t points = points_near(grid, key);
     State& s = state(key);
@@ -84,17 +79,14 @@ void BlockChanges::make_due(const VoxelKey& key, State& s) {
     s.listed = true;
     const VoxelKey cell = cell_of(key);
     const auto [i, added] = cell_index_.try_emplace(cell, static_cast<std::uint32_t>(cell_due_.size()));
-    if (added) {
-        cell_keys_.push_back(cell);
-        cell_due_.emplace_back();
-    }
+    if (added) cell_due_.emplace_back();
     cell_due_[i].push_back(key);
 }
 
-std::vector<VoxelKey> BlockChanges::due_near(const Eigen::Vector3d& local, double voxel_size, double radius) {
+std::vector<BlockChanges::Due> BlockChanges::due_near(const Eigen::Vector3d& local, double voxel_size, double radius) {
     constexpr int B = BlockMap<std::int32_t>::kSize;
     const double block = B * voxel_size, cell = kCellBlocks * block;
-    std::vector<VoxelKey> out;
+    std::vector<Due> out;
     VoxelKey lo, hi;
     for (int a = 0; a < 3; ++a) {
         lo[a] = static_cast<int>(std::floor((local[a] - radius) / cell));
@@ -112,8 +104,12 @@ std::vector<VoxelKey> BlockChanges::due_near(const Eigen::Vector3d& local, doubl
                     st.listed = st.dirty;
                     return !st.dirty;
                 });
-                for (const VoxelKey& key : keys)
-                    if (((key.cast<double>().array() + 0.5) * block - local.array()).matrix().squaredNorm() <= r2) out.push_back(key);
+                for (const VoxelKey& key : keys) {
+                    const double d2 = ((key.cast<double>().array() + 0.5) * block - local.array()).matrix().squaredNorm();
+                    if (d2 > r2) continue;
+                    const State& st = states_[index_.find(key)];
+                    out.push_back({key, d2, !st.meshed || st.removed_since > 0});
+                }
             }
     return out;
 }
@@ -133,7 +129,7 @@ std::size_t BlockChanges::memory_bytes() const {
     std::size_t due_bytes = cell_due_.capacity() * sizeof(std::vector<VoxelKey>);
     for (const auto& keys : cell_due_) due_bytes += keys.capacity() * sizeof(VoxelKey);
     return index_.memory_bytes() + states_.capacity() * sizeof(State) + block_points_.capacity() * sizeof(std::uint64_t) +
-           cell_index_.memory_bytes() + cell_keys_.capacity() * sizeof(VoxelKey) + due_bytes;
+           cell_index_.memory_bytes() + due_bytes;
 }
 
 }  // namespace lidarsurf

@@ -16,9 +16,7 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 const ReconstructionConfig& checked(const ReconstructionConfig& c) {
-    c.validate();
-    if (!c.seeded_surface)
-        throw InvalidArgument("the live mesh needs the seeded surface (the paper's method as written meshes every defined cube of the map)");
+    LiveMesh::check(c);
     return c;
 }
 
@@ -42,6 +40,12 @@ std::size_t MeshDelta::triangles() const {
     return n;
 }
 
+void LiveMesh::check(const ReconstructionConfig& config) {
+    config.validate();
+    if (!config.seeded_surface)
+        throw InvalidArgument("the live mesh needs the seeded surface (the paper's method as written meshes every defined cube of the map)");
+}
+
 LiveMesh::LiveMesh(const ReconstructionConfig& config)
     : config_(checked(config)), changes_(config.live_growth, config.live_reach_blocks) {}
 
@@ -50,7 +54,6 @@ void LiveMesh::record(VoxelGrid& grid) {
         started_ = true;
         grid.track_changes();
         changes_.record_all(grid);
-        grid.take_changes();  // already counted
         return;
     }
     changes_.record(grid, grid.take_changes());
@@ -60,21 +63,11 @@ MeshDelta LiveMesh::update(const VoxelGrid& grid, const Eigen::Vector3d& sensor,
     const auto t0 = Clock::now();
     MeshDelta delta;
     if (!grid.has_origin()) return delta;
-    // The due blocks, nearest first (their centres' distance to `position`).
-    constexpr int B = BlockMap<std::int32_t>::kSize;
-    const double alpha = grid.voxel_size();
-    const Eigen::Vector3d local = grid.to_local(position);
-    // The urgent ones (never meshed, or a voxel removed near them) first, then those whose points grew.
-    struct Due {
-        bool later;
-        double distance2;
-        VoxelKey key;
-    };
-    std::vector<Due> due;
-    for (const VoxelKey& key : changes_.due_near(local, alpha, config_.live_range))
-        due.push_back({!changes_.urgent(key), ((key.cast<double>() * B + Eigen::Vector3d::Constant(B / 2.0)) * alpha - local).squaredNorm(), key});
-    std::sort(due.begin(), due.end(), [](const Due& a, const Due& b) {
-        if (a.later != b.later) return b.later;
+    // The urgent blocks (never meshed, or a voxel removed near them) first, then those whose
+    // points grew; each group nearest `position` first.
+    std::vector<BlockChanges::Due> due = changes_.due_near(grid.to_local(position), grid.voxel_size(), config_.live_range);
+    std::sort(due.begin(), due.end(), [](const BlockChanges::Due& a, const BlockChanges::Due& b) {
+        if (a.urgent != b.urgent) return a.urgent;
         if (a.distance2 != b.distance2) return a.distance2 < b.distance2;
         return less_zyx(a.key, b.key);
     });

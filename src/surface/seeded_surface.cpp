@@ -535,17 +535,26 @@ std::uint64_t defined_bits(const std::int32_t* slots) {
 
 namespace {
 // The grid blocks a region's windows read (creation indices, each once): those within `reach`
-// blocks of a vertex block of the region's cubes (a region block or the next one along some axes).
+// blocks of a vertex block of the region's cubes (a region block or the next one along some axes),
+// that is the region's blocks dilated by [-reach, reach + 1], one axis after the other (6 + 2 reach
+// keys per block and axis instead of (2 reach + 2)^3 per block).
 std::vector<std::uint32_t> blocks_read_by(const VoxelGrid& grid, const SearchRegion& region, int reach) {
-    BlockIndex seen;
+    std::vector<VoxelKey> keys = region.blocks();
+    for (int axis = 0; axis < 3; ++axis) {
+        BlockIndex seen;
+        seen.reserve(keys.size() * 2);
+        std::vector<VoxelKey> dilated;
+        for (const VoxelKey& key : keys)
+            for (int d = -reach; d <= reach + 1; ++d) {
+                VoxelKey k = key;
+                k[axis] += d;
+                if (seen.try_emplace(k, 0).second) dilated.push_back(k);
+            }
+        keys = std::move(dilated);
+    }
     std::vector<std::uint32_t> out;
-    for (const VoxelKey& block : region.blocks())
-        for (int z = -reach; z <= reach + 1; ++z)
-            for (int y = -reach; y <= reach + 1; ++y)
-                for (int x = -reach; x <= reach + 1; ++x) {
-                    const std::int64_t b = grid.index().index_of(block + VoxelKey(x, y, z));
-                    if (b >= 0 && seen.try_emplace(VoxelKey(x, y, z) + block, 0).second) out.push_back(static_cast<std::uint32_t>(b));
-                }
+    for (const VoxelKey& key : keys)
+        if (const std::int64_t b = grid.index().index_of(key); b >= 0) out.push_back(static_cast<std::uint32_t>(b));
     return out;
 }
 }  // namespace

@@ -15,9 +15,9 @@ using namespace lidarsurf;
 namespace {
 
 using KeyTuple = std::tuple<int, int, int>;
-std::set<KeyTuple> as_set(const std::vector<VoxelKey>& keys) {
+std::set<KeyTuple> as_set(const std::vector<BlockChanges::Due>& due) {
     std::set<KeyTuple> s;
-    for (const VoxelKey& k : keys) s.insert({k.x(), k.y(), k.z()});
+    for (const BlockChanges::Due& d : due) s.insert({d.key.x(), d.key.y(), d.key.z()});
     return s;
 }
 // `n` points in voxel `v` (alpha 0.2, origin at 0: the first point is at the voxel's centre).
@@ -66,12 +66,14 @@ TEST(BlockChanges, PointsMakeABlockDueOnlyPastTheGrowthButARemovalAlways) {
     add(grid, {2, 1, 1}, 1);  // 11 new on 20: past it
     changes.record(grid, grid.take_changes());
     EXPECT_EQ(due(changes), (std::set<KeyTuple>{{0, 0, 0}}));
+    EXPECT_FALSE(changes.due_near(Eigen::Vector3d::Zero(), 0.2, 1e3).at(0).urgent) << "grown, meshed before";
     changes.mark_meshed(grid, {0, 0, 0});
     EXPECT_EQ(changes.points_near(grid, {0, 0, 0}), 31u);
     // One voxel removed: due at once, and its points are gone from the count.
     grid.remove(static_cast<std::size_t>(grid.find({2, 1, 1}) - grid.stats().data()));
     changes.record(grid, grid.take_changes());
     EXPECT_EQ(due(changes), (std::set<KeyTuple>{{0, 0, 0}}));
+    EXPECT_TRUE(changes.due_near(Eigen::Vector3d::Zero(), 0.2, 1e3).at(0).urgent) << "a voxel removed near it";
     changes.mark_meshed(grid, {0, 0, 0});
     EXPECT_EQ(changes.points_near(grid, {0, 0, 0}), 30u);
     EXPECT_THROW(BlockChanges(-1, 1), InvalidArgument);
@@ -87,6 +89,11 @@ TEST(BlockChanges, OnlyTheDueBlocksWithinTheRadiusAreRead) {
     EXPECT_EQ(changes.due_count(), 10u);
     // Block b's centre is at 1.6 b + 0.8 m (0.8 m off the axis): within 30 m of x = 60 m, the
     // blocks at 39.2, 52, 64.8 and 77.6 m (26.4 and 90.4 m are not).
-    const std::set<KeyTuple> near = as_set(changes.due_near(Eigen::Vector3d(60, 0, 0), 0.2, 30));
-    EXPECT_EQ(near, (std::set<KeyTuple>{{24, 0, 0}, {32, 0, 0}, {40, 0, 0}, {48, 0, 0}}));
+    const std::vector<BlockChanges::Due> due = changes.due_near(Eigen::Vector3d(60, 0, 0), 0.2, 30);
+    EXPECT_EQ(as_set(due), (std::set<KeyTuple>{{24, 0, 0}, {32, 0, 0}, {40, 0, 0}, {48, 0, 0}}));
+    for (const BlockChanges::Due& d : due) {
+        const double dx = 1.6 * d.key.x() + 0.8 - 60;
+        EXPECT_NEAR(d.distance2, dx * dx + 2 * 0.8 * 0.8, 1e-9);
+        EXPECT_TRUE(d.urgent) << "never meshed";
+    }
 }

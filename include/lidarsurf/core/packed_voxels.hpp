@@ -98,7 +98,11 @@ private:
 
     void pack(std::size_t b) const;      // copies block b's records and builds its ranks
     void pack_now(std::size_t b) const;  // packs block b, or waits for the thread packing it
-    void build_dense_table();            // dense_, when the blocks' box is dense enough
+    void allocate(std::size_t blocks);   // the blocks' headers and the room for their records
+    void index_keys(const std::vector<VoxelKey>& keys);         // dense_: keys[b] -> b
+    void pack_up_front(const std::vector<std::uint8_t>* eager);  // the flagged blocks (all without flags), in parallel
+    // The creation index in the grid of this snapshot's block b.
+    std::size_t in_grid(std::size_t b) const { return subset_ ? grid_blocks_[b] : b; }
 
     const VoxelGrid* grid_;
     std::size_t voxel_count_ = 0;
@@ -106,8 +110,8 @@ private:
     std::vector<std::size_t> start_;   // first record of each block
     mutable std::vector<Block> blocks_;  // in the grid's block creation order
     std::unique_ptr<std::atomic<std::uint8_t>[]> state_;
-    // The blocks' creation indices in a dense table of their box; without a box when the box is
-    // too sparse (find() then probes the grid's index).
+    // The blocks' positions here by key, in a dense table of their box; without a box when the box
+    // is too sparse (find() then probes the grid's index, or for a subset this hash).
     BlockIndex dense_;
     // Built from a subset of the blocks: dense_ (a box or a hash) maps their keys to their
     // positions in the subset, and grid_blocks_ to their creation indices in the grid.

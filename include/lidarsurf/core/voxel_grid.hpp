@@ -140,7 +140,6 @@ public:
     };
     /// Starts the journal (off by default: a batch fusion pays nothing for it).
     void track_changes();
-    bool tracks_changes() const { return tracking_; }
     /// The blocks changed since the last call (or since track_changes()), each once, in the order
     /// they were first changed; empties the journal.
     std::vector<BlockChange> take_changes();

@@ -30,13 +30,18 @@ public:
     /// Every block of the grid as changed (a live mesh started on a grid that already holds points).
     void record_all(const VoxelGrid& grid);
 
+    /// A block due for meshing, seen from a position.
+    struct Due {
+        VoxelKey key;
+        double distance2 = 0;  ///< squared distance (m^2) from the position to the block's centre
+        /// Never meshed, or a voxel near it was removed (what moved must leave the live mesh): to
+        /// be meshed before the blocks whose points only grew.
+        bool urgent = false;
+    };
     /// The blocks due for meshing whose centre lies within `radius` (metres) of `local` (the
     /// grid's local frame), each once. Reads only the cells of due blocks near `local` (cubes of
     /// kCellBlocks^3 blocks), so a long drive's blocks left behind cost nothing.
-    std::vector<VoxelKey> due_near(const Eigen::Vector3d& local, double voxel_size, double radius);
-    /// Whether due block `key` must be meshed before the blocks whose points only grew: it was
-    /// never meshed, or a voxel near it was removed (what moved must leave the live mesh).
-    bool urgent(const VoxelKey& key) const;
+    std::vector<Due> due_near(const Eigen::Vector3d& local, double voxel_size, double radius);
     /// Blocks due, anywhere.
     std::size_t due_count() const { return due_count_; }
     /// Block `key` was meshed from the grid as it is now: its counts start again from there, and
@@ -69,7 +74,6 @@ private:
     // The due blocks by cell (kCellBlocks^3 blocks); a block meshed since it became due stays in
     // its cell's list until due_near() next reads that cell.
     BlockIndex cell_index_;
-    std::vector<VoxelKey> cell_keys_;
     std::vector<std::vector<VoxelKey>> cell_due_;
     std::size_t due_count_ = 0;
 };

@@ -51,6 +51,8 @@ public:
     /// Throws InvalidArgument if `config` is invalid or meshes without the seeded surface (the
     /// paper as written meshes every defined cube of the map: there is no block-local form of it).
     explicit LiveMesh(const ReconstructionConfig& config);
+    /// The constructor's check alone, for a caller that refuses a configuration before any work.
+    static void check(const ReconstructionConfig& config);
 
     /// Reads what changed in `grid` since the last call (the first call starts the grid's
     /// journal and takes every block it holds as changed).
