@@ -315,13 +315,17 @@ PYBIND11_MODULE(_lidarsurf, m) {
                           "dict {key: Mesh} kept from the earlier updates, in order, to hold the live mesh.")
         .def_property_readonly(
             "changed",
-            [](const MeshDelta& d) {
+            [](py::object self) {
+                // The meshes are views into the delta (kept alive by them), not copies made at each access.
                 py::list out;
-                for (const MeshBlock& b : d.changed) out.append(py::make_tuple(py::make_tuple(b.key.x(), b.key.y(), b.key.z()), b.mesh));
+                for (const MeshBlock& b : self.cast<const MeshDelta&>().changed)
+                    out.append(py::make_tuple(py::make_tuple(b.key.x(), b.key.y(), b.key.z()),
+                                              py::cast(&b.mesh, py::return_value_policy::reference_internal, self)));
                 return out;
             },
             "[(key, Mesh)]: the blocks whose triangles changed, each with its whole new mesh (world coordinates, numpy "
-            "arrays); key = (x, y, z), the block of cubes 8 key .. 8 key + 7 of the voxel lattice.")
+            "arrays, read-only views kept valid by the Mesh); key = (x, y, z), the block of cubes 8 key .. 8 key + 7 of "
+            "the voxel lattice.")
         .def_property_readonly(
             "removed",
             [](const MeshDelta& d) {

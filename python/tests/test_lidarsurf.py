@@ -1,4 +1,5 @@
 """Tests of the Python bindings: same mesh as the CLI, numpy views, errors, Config."""
+import gc
 import os
 import subprocess
 
@@ -367,11 +368,14 @@ def test_live_mesh_deltas_applied_in_order_give_the_live_mesh(scan):
             assert isinstance(key, tuple) and len(key) == 3 and len(mesh.triangles) > 0
             client[key] = mesh
     rest = rec.update_mesh()  # no budget: everything due
-    for key in rest.removed:
-        del client[key]
-    for key, mesh in rest.changed:
-        client[key] = mesh
     assert rest.pending == 0
+    removed, changed = rest.removed, rest.changed
+    del rest  # the delta's meshes are views that outlive the delta object
+    gc.collect()
+    for key in removed:
+        del client[key]
+    for key, mesh in changed:
+        client[key] = mesh
     live = rec.live_mesh()
     assert sum(len(m.triangles) for m in client.values()) == len(live.triangles)
     ours = np.sort(np.concatenate([m.vertices[m.triangles].reshape(-1, 9) for m in client.values()]), axis=0)
