@@ -25,7 +25,7 @@ public:
     BlockChanges(double growth, int reach);
 
     /// Takes one batch of the grid's journal: the blocks within `reach` of each changed block get
-    /// its counts, and those now due join the dirty list.
+    /// its counts, and those now due are listed in their cells (due_near).
     void record(const VoxelGrid& grid, const std::vector<VoxelGrid::BlockChange>& changes);
     /// Every block of the grid as changed (a live mesh started on a grid that already holds points).
     void record_all(const VoxelGrid& grid);
