@@ -57,7 +57,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
                   "30 m of the sensor (the share of its area farther than 5 cm; slow: the exact extraction)")
         ->capture_default_str();
     f->add_option("--live-growth", o.reconstruct.config.live_growth,
-                  "Live mesh: re-mesh a block when the points near it grew by this fraction since it was meshed")
+                  "Live mesh: re-mesh a block when the points near it changed (inserted or carved) by this fraction since it was meshed")
         ->capture_default_str();
     f->add_option("--live-range", o.reconstruct.config.live_range,
                   "Live mesh: blocks farther than this from the sensor (metres) wait until it comes back near them")

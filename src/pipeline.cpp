@@ -69,10 +69,7 @@ MeshDelta Reconstructor::update_mesh(double budget_ms) {
     if (!std::isfinite(budget_ms)) throw InvalidArgument("update_mesh: the budget must be finite (<= 0: no limit)");
     if (!live_) live_.emplace(config_);
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
-    return arena.execute([&] {
-        live_->record(grid_);
-        return live_->update(grid_, sensor_, last_viewpoint_, budget_ms / 1e3);
-    });
+    return arena.execute([&] { return live_->update(grid_, sensor_, last_viewpoint_, budget_ms / 1e3); });
 }
 
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from) {

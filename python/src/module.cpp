@@ -221,7 +221,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
         .def_readwrite("carve_range", &ReconstructionConfig::carve_range,
                        "Carving: the voxels within this distance (metres) of each scan's sensor are tested against it.")
         .def_readwrite("live_growth", &ReconstructionConfig::live_growth,
-                       "Live mesh: a block is meshed again when the points within live_reach_blocks of it grew by this fraction.")
+                       "Live mesh: a block is meshed again when the points within live_reach_blocks of it changed (inserted or carved) by this fraction, or at once when one of its own voxels was carved.")
         .def_readwrite("live_range", &ReconstructionConfig::live_range,
                        "Live mesh: blocks farther than this (metres) from the last viewpoint wait until it comes back near them.")
         .def_readwrite("live_reach_blocks", &ReconstructionConfig::live_reach_blocks,

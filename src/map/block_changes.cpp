@@ -19,8 +19,8 @@ BlockChanges::State& BlockChanges::state(const VoxelKey& key) {
 
 bool BlockChanges::due(const State& s) const {
     if (s.removed_since > 0) return true;
-    if (s.points_since == 0) return false;
-    return !s.meshed || static_cast<double>(s.points_since) > growth_ * static_cast<double>(s.points_at_mesh);
+    if (s.changed_since == 0) return false;
+    return !s.meshed || static_cast<double>(s.changed_since) > growth_ * static_cast<double>(s.points_at_mesh);
 }
 
 void BlockChanges::record(const VoxelGrid& grid, const std::vector<VoxelGrid::BlockChange>& changes) {
@@ -34,8 +34,8 @@ void BlockChanges::record(const VoxelGrid& grid, const std::vector<VoxelGrid::Bl
                 for (int x = -reach_; x <= reach_; ++x) {
                     const VoxelKey key = block + VoxelKey(x, y, z);
                     State& s = state(key);
-                    s.points_since += c.points;
-                    s.removed_since += c.removed_voxels;
+                    s.changed_since += c.points + c.removed_points;
+                    if (x == 0 && y == 0 && z == 0) s.removed_since += c.removed_voxels;
                     if (!s.dirty && due(s)) make_due(key, s);
                 }
     }
@@ -57,7 +57,7 @@ void BlockChanges::mark_meshed(const VoxelGrid& grid, const VoxelKey& key) {
     const std::uint64_t points = points_near(grid, key);
     State& s = state(key);
     s.points_at_mesh = points;
-    s.points_since = 0;
+    s.changed_since = 0;
     s.removed_since = 0;
     s.meshed = true;
     if (s.dirty) --due_count_;

@@ -49,22 +49,19 @@ void LiveMesh::check(const ReconstructionConfig& config) {
 LiveMesh::LiveMesh(const ReconstructionConfig& config)
     : config_(checked(config)), changes_(config.live_growth, config.live_reach_blocks) {}
 
-void LiveMesh::record(VoxelGrid& grid) {
+MeshDelta LiveMesh::update(VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds) {
+    const auto t0 = Clock::now();
     if (!started_) {
         started_ = true;
         grid.track_changes();
         changes_.record_all(grid);
-        return;
+    } else {
+        changes_.record(grid, grid.take_changes());
     }
-    changes_.record(grid, grid.take_changes());
-}
-
-MeshDelta LiveMesh::update(const VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds) {
-    const auto t0 = Clock::now();
     MeshDelta delta;
     if (!grid.has_origin()) return delta;
-    // The urgent blocks (never meshed, or a voxel removed near them) first, then those whose
-    // points grew; each group nearest `position` first.
+    // The urgent blocks (never meshed, or one of their voxels removed) first, then those whose
+    // points changed; each group nearest `position` first.
     std::vector<BlockChanges::Due> due = changes_.due_near(grid.to_local(position), grid.voxel_size(), config_.live_range);
     std::sort(due.begin(), due.end(), [](const BlockChanges::Due& a, const BlockChanges::Due& b) {
         if (a.urgent != b.urgent) return a.urgent;

@@ -97,3 +97,39 @@ TEST(BlockChanges, OnlyTheDueBlocksWithinTheRadiusAreRead) {
         EXPECT_TRUE(d.urgent) << "never meshed";
     }
 }
+
+// Carving removes a voxel: its own block is due at once (urgent); the blocks around it count the
+// removed points as a change, due only past the growth like inserted points.
+TEST(BlockChanges, ARemovalMakesItsOwnBlockUrgentAndCountsAsAChangeAroundIt) {
+    VoxelGrid grid(0.2, Eigen::Vector3d::Zero());
+    grid.track_changes();
+    BlockChanges changes(0.5, 1);
+    add(grid, {3, 3, 3}, 40);   // block (0, 0, 0)
+    add(grid, {11, 3, 3}, 60);  // block (1, 0, 0)
+    add(grid, {4, 3, 3}, 4);    // block (0, 0, 0), to be carved
+    changes.record(grid, grid.take_changes());
+    for (int z = -1; z <= 1; ++z)
+        for (int y = -1; y <= 1; ++y)
+            for (int x = -1; x <= 2; ++x) changes.mark_meshed(grid, {x, y, z});
+    ASSERT_EQ(changes.due_count(), 0u);
+    // 4 of the 104 points within reach of blocks (0, *, *) and (1, *, *), 4 of the 44 of blocks
+    // (-1, *, *): under 50 %.
+    grid.remove(static_cast<std::size_t>(grid.find({4, 3, 3}) - grid.stats().data()));
+    changes.record(grid, grid.take_changes());
+    const std::vector<BlockChanges::Due> carved = changes.due_near(Eigen::Vector3d::Zero(), 0.2, 1e3);
+    ASSERT_EQ(as_set(carved), (std::set<KeyTuple>{{0, 0, 0}}));
+    EXPECT_TRUE(carved[0].urgent);
+    changes.mark_meshed(grid, {0, 0, 0});
+    // The voxel of block (1, 0, 0) carved: 60 points, past 50 % of the 100 within reach of block
+    // (0, 0, 0), of the 104 of the other blocks (0..1, *, *) (64 changed with the first removal) and of
+    // the 60 of blocks (2, *, *): due around it, urgent only itself.
+    grid.remove(static_cast<std::size_t>(grid.find({11, 3, 3}) - grid.stats().data()));
+    changes.record(grid, grid.take_changes());
+    std::set<KeyTuple> around;
+    for (int z = -1; z <= 1; ++z)
+        for (int y = -1; y <= 1; ++y)
+            for (int x = 0; x <= 2; ++x) around.insert({x, y, z});
+    EXPECT_EQ(due(changes), around);
+    for (const BlockChanges::Due& d : changes.due_near(Eigen::Vector3d::Zero(), 0.2, 1e3))
+        EXPECT_EQ(d.urgent, d.key == VoxelKey(1, 0, 0)) << d.key.transpose();
+}

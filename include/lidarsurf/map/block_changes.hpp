@@ -1,12 +1,16 @@
 #pragma once
 // Which blocks of a fused map need meshing again (docs/method.md, "Live mesh"). A vertex's TSDF
 // depends on the voxels within ReconstructionConfig::max_reach() of it; a block of the mesh (an
-// 8^3 block of cubes, the grid's block) is re-meshed when what lies within `reach` blocks of it
-// changed enough since it was last meshed:
-//  - a voxel there was removed (free-space carving: what moved must go at once), or
-//  - the points there grew by `growth` (a fraction) of what they were, or the block was never
-//    meshed. Points keep coming where the sensor looks, but each scan adds less to what is there:
-//    a block seen by n scans is meshed about log(n) / log(1 + growth) times, not n times.
+// 8^3 block of cubes, the grid's block) is re-meshed when
+//  - one of its own voxels was removed (free-space carving: what moved must go at once; the
+//    blocks around it count the removed points as a change, below), or
+//  - the points within `reach` blocks of it changed (inserted, or removed by carving) by `growth`
+//    (a fraction) of what they were when it was last meshed, or it was never meshed. Points keep
+//    coming where the sensor looks, but each scan adds less to what is there: a block seen by n
+//    scans is meshed about log(n) / log(1 + growth) times, not n times.
+// Carving removes a few voxels near most surfaces at every scan (grazing rays, mixed returns): were
+// a removal to make the 27 blocks around it due at once, those blocks, most of them for a change
+// their growth test does not notice, would take the whole budget (docs/benchmarks.md, "Live maps").
 // The tracker reads the grid's journal (VoxelGrid::take_changes): its work per scan follows the
 // blocks the scan changed, not the map.
 #include <cstdint>
@@ -25,7 +29,8 @@ public:
     BlockChanges(double growth, int reach);
 
     /// Takes one batch of the grid's journal: the blocks within `reach` of each changed block get
-    /// its counts, and those now due are listed in their cells (due_near).
+    /// its points inserted and removed, the block itself its voxels removed; those now due are
+    /// listed in their cells (due_near).
     void record(const VoxelGrid& grid, const std::vector<VoxelGrid::BlockChange>& changes);
     /// Every block of the grid as changed (a live mesh started on a grid that already holds points).
     void record_all(const VoxelGrid& grid);
@@ -34,8 +39,8 @@ public:
     struct Due {
         VoxelKey key;
         double distance2 = 0;  ///< squared distance (m^2) from the position to the block's centre
-        /// Never meshed, or a voxel near it was removed (what moved must leave the live mesh): to
-        /// be meshed before the blocks whose points only grew.
+        /// Never meshed, or one of its voxels was removed (what moved must leave the live mesh):
+        /// to be meshed before the blocks whose points only changed.
         bool urgent = false;
     };
     /// The blocks due for meshing whose centre lies within `radius` (metres) of `local` (the
@@ -56,8 +61,8 @@ public:
 private:
     struct State {
         std::uint64_t points_at_mesh = 0;  // points within reach when last meshed
-        std::uint64_t points_since = 0;    // points inserted within reach since
-        std::uint32_t removed_since = 0;   // voxels removed within reach since
+        std::uint64_t changed_since = 0;   // points inserted or removed within reach since
+        std::uint32_t removed_since = 0;   // voxels of this block removed since
         bool meshed = false;
         bool dirty = false;   // due
         bool listed = false;  // in its cell's list (a block meshed since it was listed stays there until the cell is read)

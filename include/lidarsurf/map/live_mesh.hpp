@@ -2,8 +2,8 @@
 // The live mesh of a fused map (docs/method.md, "Live mesh"): the map's surface kept per block
 // (the grid's 8^3 blocks of cubes) and brought up to date scan by scan, at a cost that follows
 // what the scan changed, not the map:
-//  - BlockChanges says which blocks are due (voxels removed near them, or points grown by a
-//    fraction since they were meshed);
+//  - BlockChanges says which blocks are due (one of their voxels removed, or the points near
+//    them changed by a fraction since they were meshed);
 //  - the due blocks nearest the sensor are meshed first, in batches, until the time budget is
 //    spent; the others wait for the next updates, and those beyond live_range until the sensor
 //    comes back near them (the exact extraction has them all);
@@ -54,13 +54,13 @@ public:
     /// The constructor's check alone, for a caller that refuses a configuration before any work.
     static void check(const ReconstructionConfig& config);
 
-    /// Reads what changed in `grid` since the last call (the first call starts the grid's
-    /// journal and takes every block it holds as changed).
-    void record(VoxelGrid& grid);
-    /// Meshes the due blocks within live_range of `position` (world), nearest first, in batches, until
-    /// `budget_seconds` is spent (a batch is begun while some budget is left, so the first always
-    /// runs; <= 0: every due block). `sensor` orients the normals as in extract_mesh.
-    MeshDelta update(const VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds);
+    /// Reads what changed in `grid` since the last call (takes the grid's journal; the first call
+    /// starts it and takes every block the grid holds as changed), then meshes the due blocks
+    /// within live_range of `position` (world), urgent first, nearest first, in batches, until
+    /// `budget_seconds` is spent, the reading included (a batch is begun while some budget is
+    /// left, so the first always runs; <= 0: every due block). `sensor` orients the normals as in
+    /// extract_mesh.
+    MeshDelta update(VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds);
 
     /// The live mesh: the blocks' meshes one after the other, blocks in (z, y, x) order of their
     /// keys. Walks the whole map (for a viewer's first frame, a file, tests), unlike update().

@@ -82,14 +82,15 @@ struct ReconstructionConfig {
     int carve_min_scans = 2;           ///< passes needed before a voxel can be carved
     double carve_range = 40.0;         ///< metres: voxels farther from a scan's viewpoint are not tested against it
     /// The live mesh (Reconstructor::update_mesh, docs/method.md "Live mesh"): a block of the
-    /// map is re-meshed when a voxel within live_reach_blocks blocks of it was removed, or when the
-    /// points there grew by live_growth (a fraction) since it was last meshed; its search keeps to
-    /// the block and live_halo_cubes cubes around it. Blocks farther than live_range (metres) from
-    /// the sensor wait until it comes back within that range (or for the exact extraction).
+    /// map is re-meshed when one of its voxels was removed, or when the points within
+    /// live_reach_blocks blocks of it changed (inserted or removed) by live_growth (a fraction of
+    /// them) since it was last meshed; its search keeps to the block and live_halo_cubes cubes
+    /// around it. Blocks farther than live_range (metres) from the sensor wait until it comes back
+    /// within that range (or for the exact extraction).
     double live_growth = 0.25;
     double live_range = 50.0;
     int live_reach_blocks = 1;
-    int live_halo_cubes = 2;
+    int live_halo_cubes = 0;
     int threads = 0;           ///< Worker threads; 0 = all cores.
     /// Memory budget in MiB: the reconstruction refuses (ResourceLimit, with its estimate) a cloud
     /// whose voxel grid and TSDF would need more (docs/reliability.md, "Memory budget").
