@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl map-peers install package-check pip-check viewer-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl map-peers install package-check pip-check viewer-check bare-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -120,6 +120,11 @@ package-check: build
 viewer-check: build
 	@bash scripts/setup.sh viewer
 	bash scripts/viewer_check.sh $(BUILD)/bin/lidarsurf $(CURDIR)/$(BUILD)/viewer-check
+
+# A clone built as a new user builds it (plain cmake, no setup.sh, so no three.js): the CLI builds
+# with the viewer left out, and `lidarsurf view` exits 2 saying how to add it.
+bare-check:
+	JOBS=$(JOBS) bash scripts/bare_build_check.sh $(CURDIR)/$(BUILD)/bare-check
 
 # The Python package as pip builds and installs it, offline: a wheel from pyproject.toml, installed
 # into a fresh venv (--system-site-packages) and for the system Python; the README's Python lines

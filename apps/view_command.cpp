@@ -106,6 +106,7 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
 }
 
 int run_view(const ViewOptions& o) {
+    if (!viewer_assets::available) throw InvalidArgument(std::string(viewer_assets::missing));
     if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "grey")
         throw InvalidArgument("--colour must be height, level, confidence or grey (got '" + o.colour + "')");
     if (o.max_points < 1) throw InvalidArgument("--max-points must be >= 1");
