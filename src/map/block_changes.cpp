@@ -29,13 +29,13 @@ void BlockChanges::record(const VoxelGrid& grid, const std::vector<VoxelGrid::Bl
     for (const VoxelGrid::BlockChange& c : changes) {
         block_points_[c.block] = block_points_[c.block] + c.points - c.removed_points;
         const VoxelKey& block = keys[c.block];
+        state(block).removed_since += c.removed_voxels;  // its own: due at once (the loop lists it)
         for (int z = -reach_; z <= reach_; ++z)
             for (int y = -reach_; y <= reach_; ++y)
                 for (int x = -reach_; x <= reach_; ++x) {
                     const VoxelKey key = block + VoxelKey(x, y, z);
                     State& s = state(key);
                     s.changed_since += c.points + c.removed_points;
-                    if (x == 0 && y == 0 && z == 0) s.removed_since += c.removed_voxels;
                     if (!s.dirty && due(s)) make_due(key, s);
                 }
     }
