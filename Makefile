@@ -42,11 +42,11 @@ sanitize: setup
 
 # The parallel code under ThreadSanitizer (third build directory): the tests whose code runs TBB
 # loops (surface search, reference TSDF, free-space carving, IMLS, metrics, map metrics, simulator,
-# renderer, pipeline, the live mesh), linked
+# renderer, pipeline, the live mesh, the live view's feed and server), linked
 # against Debian's oneTBB source rebuilt with TSan (scripts/build_tbb_tsan.sh: Debian's libtbb is
 # not instrumented, and TSan would report every hand-off between its threads as a race).
 # The four slowest (the same parallel code on more data, 290 s under TSan) are left out.
-TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*$\
+TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*:LiveFeed.*:LiveServer.*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo
 tsan:
 	@bash scripts/setup.sh tsan
@@ -115,14 +115,17 @@ package-check: build
 	$(BUILD)/pkg-consumer/consumer_sim
 	bash tests/package/readme_consumer.sh $(BUILD)
 
-# The page `lidarsurf view` writes, in headless Chromium (Debian's chromium, installed by
-# `setup.sh viewer`): screenshots coloured by height and by level (scripts/viewer_check.sh).
+# The viewer's pages in headless Chromium (Debian's chromium and, to drive it, playwright-core from
+# npm, both installed by `setup.sh viewer`): the page `lidarsurf view` writes, coloured by height and
+# by level (scripts/viewer_check.sh); the live view of `fuse --serve` on a short drive, mid-drive,
+# later and final, the page's final mesh against fuse's output (scripts/live_view_check.sh).
 viewer-check: build
 	@bash scripts/setup.sh viewer
 	bash scripts/viewer_check.sh $(BUILD)/bin/lidarsurf $(CURDIR)/$(BUILD)/viewer-check
+	bash scripts/live_view_check.sh $(BUILD)/bin/lidarsurf $(CURDIR)/$(BUILD)/live-view-check
 
 # A clone built as a new user builds it (plain cmake, no setup.sh, so no three.js): the CLI builds
-# with the viewer left out, and `lidarsurf view` exits 2 saying how to add it.
+# with the viewer left out, and `lidarsurf view` and `fuse --serve` exit 2 saying how to add it.
 bare-check:
 	JOBS=$(JOBS) bash scripts/bare_build_check.sh $(CURDIR)/$(BUILD)/bare-check
 

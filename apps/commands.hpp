@@ -60,6 +60,9 @@ struct FuseOptions {
     bool live = false;   // keep the live mesh, updated after every scan
     double live_budget_ms = 30;
     int live_check_every = 0;  // compare the live mesh with the exact one every this many scans (0: never)
+    int serve = -1;            // --serve PORT: the live view on this port (-1: none; 0: a free one)
+    std::string bind = "127.0.0.1";
+    double rate = 0;           // scans a second (0: as fast as it goes)
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
 };
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <thread>
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -16,12 +18,15 @@
 
 #include "commands.hpp"
 #include "file_roles.hpp"
+#include "interrupt.hpp"
 #include "progress.hpp"
+#include "viewer_page.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/eval/live_staleness.hpp"
 #include "lidarsurf/eval/metrics.hpp"
+#include "lidarsurf/viz/live_server.hpp"
 
 namespace fs = std::filesystem;
 
@@ -68,6 +73,17 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("--live-halo-cubes", o.reconstruct.config.live_halo_cubes,
                   "Live mesh: the surface search of a block reaches this many cubes beyond it")
         ->capture_default_str();
+    f->add_option("--serve", o.serve,
+                  "Watch the map grow in a browser: serve the live view at http://127.0.0.1:PORT/ (implies --live; 0: a free "
+                  "port, printed). After the drive the final map stays served until Ctrl-C")
+        ->type_name("PORT");
+    f->add_option("--bind", o.bind, "With --serve: the address to listen on (e.g. 0.0.0.0 for every interface; the view is open to anyone "
+                                    "who reaches it)")
+        ->type_name("ADDR")
+        ->capture_default_str();
+    f->add_option("--rate", o.rate, "Replay the scans at this many a second (0: as fast as they fuse), e.g. 10 for a recorded drive")
+        ->type_name("HZ")
+        ->capture_default_str();
     f->add_option("--json", o.json, "Also write a report: times by stage, and per frame the time, voxels and resident memory");
     f->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     add_reconstruct_options(f, o.reconstruct);
@@ -76,7 +92,8 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
               "frame 0's velodyne frame. Moving objects are carved away (--carve 0 keeps them).\n\n"
               "Examples:\n  lidarsurf simulate --frames 20 -o town && lidarsurf fuse town -o town.ply --remesh-every 1\n"
               "  lidarsurf fuse dataset/sequences/00 -o kitti00.ply --frames 200\n"
-              "  lidarsurf fuse drive --poses drive_poses.txt -o drive.ply");
+              "  lidarsurf fuse drive --poses drive_poses.txt -o drive.ply\n"
+              "  lidarsurf fuse town -o town.ply --serve 8080 --rate 10          (then open http://127.0.0.1:8080/)");
     return f;
 }
 
@@ -105,9 +122,14 @@ int run_fuse(const FuseOptions& o) {
     if (!std::isfinite(o.live_budget_ms) || o.live_budget_ms < 0 || o.live_check_every < 0)
         throw InvalidArgument("--live-budget-ms and --live-check-every must be >= 0");
     if (!o.live && o.live_check_every > 0) throw InvalidArgument("--live-check-every measures the live mesh: add --live");
+    if (o.serve < -1 || o.serve > 65535) throw InvalidArgument("--serve takes a port in [0, 65535] (0: a free one)");
+    if (!std::isfinite(o.rate) || o.rate < 0) throw InvalidArgument("--rate must be >= 0 scans a second");
+    const bool serve = o.serve >= 0, live = o.live || serve;
+    if (!serve && o.bind != "127.0.0.1") throw InvalidArgument("--bind is the live view's address: add --serve PORT");
+    if (serve) require_viewer();
     const Method m = resolve_method(o.reconstruct);
     if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
-    if (o.live) LiveMesh::check(m.config);  // before any scan is read
+    if (live) LiveMesh::check(m.config);  // before any scan is read
     const MeshFormat requested = parse_mesh_format(o.mesh_format);
     const KittiSequence seq{o.dir};
     const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
@@ -138,9 +160,25 @@ int run_fuse(const FuseOptions& o) {
     bool fresh = false;  // whether `mesh` holds every frame fused so far
     nlohmann::json per_frame = nlohmann::json::array();
     std::vector<double> update_times, stale_shares;
+    // The live view: listening before the first scan (a port in use: exit 4 before any work).
+    std::unique_ptr<LiveServer> server;
+    std::string address;
+    if (serve) {
+        LiveServerConfig sc;
+        sc.bind = o.bind;
+        sc.port = o.serve;
+        nlohmann::json data = {{"title", fs::path(seq.dir).filename().string() + " (live)"}, {"colour", "height"}, {"live", true}};
+        server = std::make_unique<LiveServer>(sc, viewer_page(data));
+        const bool v6 = o.bind.find(':') != std::string::npos;
+        address = "http://" + (v6 ? "[" + o.bind + "]" : o.bind) + ":" + std::to_string(server->port()) + "/";
+        std::fprintf(stderr, "fuse: the live view is at %s\n", address.c_str());
+    }
     Progress progress("fuse", "frames", frames.size(), o.quiet);
+    const auto start = std::chrono::steady_clock::now();
     for (std::size_t n = 0; n < frames.size(); ++n) {
         const std::size_t i = frames[n];
+        if (o.rate > 0) std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                                  std::chrono::duration<double>(static_cast<double>(n) / o.rate)));
         auto t0 = std::chrono::steady_clock::now();
         PointCloud cloud = read_points(seq.scan(i), m.read);
         const Eigen::Isometry3d& pose = poses[i];
@@ -155,9 +193,9 @@ int run_fuse(const FuseOptions& o) {
         // The exact mesh along the way: for --remesh-every, and for the live mesh's check (one
         // extraction when both fall on this scan).
         auto falls_here = [&](int every) { return every > 0 && ((n + 1) % static_cast<std::size_t>(every) == 0 || n + 1 == frames.size()); };
-        const bool remesh = falls_here(o.remesh_every), check = o.live && falls_here(o.live_check_every);
-        if (o.live) {
-            const MeshDelta delta = rec.update_mesh(o.live_budget_ms);
+        const bool remesh = falls_here(o.remesh_every), check = live && falls_here(o.live_check_every);
+        if (live) {
+            MeshDelta delta = rec.update_mesh(o.live_budget_ms);
             const double update_ms = ms_since(t_update);
             update_times.push_back(update_ms);
             row["update_ms"] = update_ms;
@@ -167,6 +205,11 @@ int run_fuse(const FuseOptions& o) {
             row["meshed_blocks"] = delta.meshed_blocks;
             row["pending_blocks"] = delta.pending;
             row["live_triangles"] = rec.live()->triangle_count();
+            if (server) {
+                const auto t_serve = std::chrono::steady_clock::now();
+                server->publish(std::move(delta), pose, static_cast<std::uint32_t>(n + 1));
+                row["serve_ms"] = ms_since(t_serve);
+            }
         }
         progress.update(n + 1, std::to_string(rec.summary().voxels) + " voxels");
         fresh = remesh || check;
@@ -220,28 +263,41 @@ int run_fuse(const FuseOptions& o) {
                                     {"write", write_ms / 1e3}}},
                                   {"peak_resident_mib", peak_resident_mib()},
                                   {"per_frame", per_frame}};
-        if (o.live) {
+        if (live) {
             const DirectedError update = summarize(update_times);
-            nlohmann::json live = {{"budget_ms", o.live_budget_ms},
-                                   {"growth", m.config.live_growth},
-                                   {"range_m", m.config.live_range},
-                                   {"reach_blocks", m.config.live_reach_blocks},
-                                   {"halo_cubes", m.config.live_halo_cubes},
-                                   {"update_ms_median", update.median},
-                                   {"update_ms_p90", update.p90},
-                                   {"update_ms_max", update.max}};
+            nlohmann::json live_report = {{"budget_ms", o.live_budget_ms},
+                                          {"growth", m.config.live_growth},
+                                          {"range_m", m.config.live_range},
+                                          {"reach_blocks", m.config.live_reach_blocks},
+                                          {"halo_cubes", m.config.live_halo_cubes},
+                                          {"update_ms_median", update.median},
+                                          {"update_ms_p90", update.p90},
+                                          {"update_ms_max", update.max}};
             if (!stale_shares.empty()) {
-                live["staleness_radius_m"] = kStalenessRadius;
-                live["staleness_tolerance_m"] = kStalenessTolerance;
+                live_report["staleness_radius_m"] = kStalenessRadius;
+                live_report["staleness_tolerance_m"] = kStalenessTolerance;
                 const DirectedError stale = summarize(stale_shares);
-                live["staleness_median"] = stale.median;
-                live["staleness_max"] = stale.max;
+                live_report["staleness_median"] = stale.median;
+                live_report["staleness_max"] = stale.max;
             }
-            j["live"] = live;
+            j["live"] = live_report;
+        }
+        if (server) {
+            const LiveServer::Stats st = server->stats();  // at the end of the drive, before the final map is sent
+            j["serve"] = {{"port", server->port()},       {"clients_now", st.clients}, {"clients_accepted", st.accepted},
+                          {"clients_dropped", st.dropped}, {"messages", st.messages},  {"bytes", st.bytes}};
         }
         AtomicFile out(o.json);
         out.stream() << j.dump(1) << "\n";
         out.commit();
+    }
+    if (server) {
+        // The page keeps the final map: the exact mesh, block for block in place of the live one.
+        server->finish(split_into_blocks(mesh, rec.grid().origin(), m.config.voxel_size), poses[frames.back()],
+                       static_cast<std::uint32_t>(frames.size()));
+        std::fprintf(stderr, "fuse: %s written; the final map is at %s until Ctrl-C\n", o.output.c_str(), address.c_str());
+        finish_on_interrupt();
+        wait_for_exit();
     }
     return 0;
 }

@@ -15,6 +15,7 @@ namespace lidarsurf::cli {
 namespace {
 
 std::atomic<bool> g_interrupted{false};
+std::atomic<bool> g_finished{false};
 
 sigset_t interrupt_signals() {
     sigset_t set;
@@ -35,6 +36,10 @@ void handle_interrupts() {
         while (sigwait(&set, &sig) != 0) {
         }
         g_interrupted = true;
+        if (g_finished) {
+            std::fflush(stdout);
+            ::_exit(0);
+        }
         const std::size_t removed = remove_pending_outputs();
         char msg[160];
         const int n = std::snprintf(msg, sizeof msg, "lidarsurf: interrupted by %s; %zu unfinished output%s removed, earlier outputs untouched\n",
@@ -46,6 +51,8 @@ void handle_interrupts() {
 }
 
 bool interrupted() { return g_interrupted.load(); }
+
+void finish_on_interrupt() { g_finished = true; }
 
 void wait_for_exit() {
     for (;;) ::pause();

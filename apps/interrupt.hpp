@@ -11,6 +11,9 @@ void handle_interrupts();
 /// True once a signal is being handled; the main thread then waits for the exit instead of
 /// reporting the failed commit that the cleanup caused.
 bool interrupted();
+/// From now on a signal ends the process with 0: its work is done and written (e.g. fuse --serve
+/// showing the final map until Ctrl-C).
+void finish_on_interrupt();
 /// Blocks for good (the signal thread ends the process): for the main thread when interrupted().
 [[noreturn]] void wait_for_exit();
 

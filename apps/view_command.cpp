@@ -14,7 +14,7 @@
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
-#include "viewer_assets.hpp"
+#include "viewer_page.hpp"
 
 namespace fs = std::filesystem;
 
@@ -42,49 +42,6 @@ std::string base64(const std::vector<T>& v) {
     return base64(v.data(), v.size() * sizeof(T));
 }
 
-template <std::size_t N>
-std::string joined(const std::string_view (&pieces)[N]) {
-    std::string out;
-    for (const std::string_view piece : pieces) out.append(piece);
-    return out;
-}
-
-std::string html_escaped(std::string_view text) {
-    std::string out;
-    for (const char c : text) {
-        switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            default: out += c;
-        }
-    }
-    return out;
-}
-
-// The page with its placeholders replaced in one pass (the inserted texts are not searched).
-std::string fill(std::string_view page, const std::vector<std::pair<std::string_view, std::string_view>>& values) {
-    std::string out;
-    std::size_t at = 0;
-    while (at < page.size()) {
-        std::size_t next = std::string_view::npos;
-        const std::pair<std::string_view, std::string_view>* which = nullptr;
-        for (const auto& kv : values) {
-            const std::size_t p = page.find(kv.first, at);
-            if (p < next) next = p, which = &kv;
-        }
-        if (!which) {
-            out.append(page.substr(at));
-            break;
-        }
-        out.append(page.substr(at, next - at));
-        out.append(which->second);
-        at = next + which->first.size();
-    }
-    return out;
-}
-
 }  // namespace
 
 CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
@@ -106,7 +63,7 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
 }
 
 int run_view(const ViewOptions& o) {
-    if (!viewer_assets::available) throw InvalidArgument(std::string(viewer_assets::missing));
+    require_viewer();
     if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "grey")
         throw InvalidArgument("--colour must be height, level, confidence or grey (got '" + o.colour + "')");
     if (o.max_points < 1) throw InvalidArgument("--max-points must be >= 1");
@@ -153,11 +110,7 @@ int run_view(const ViewOptions& o) {
     data["levels"] = mesh.levels.size() == mesh.vertices.size() ? base64(mesh.levels) : "";
     data["confidence"] = mesh.confidence.size() == mesh.vertices.size() ? base64(mesh.confidence) : "";
     data["points"] = base64(cloud);
-    std::string json = data.dump(-1, ' ', true);  // ASCII
-    for (std::size_t p = 0; (p = json.find("</", p)) != std::string::npos; p += 3) json.replace(p, 2, "<\\/");  // stays inside its <script>
-    const std::string escaped_title = html_escaped(title), three = joined(viewer_assets::three), script = joined(viewer_assets::script);
-    const std::string page = fill(joined(viewer_assets::page),
-                                  {{"@TITLE@", escaped_title}, {"@DATA@", json}, {"@THREE@", three}, {"@VIEWER@", script}});
+    const std::string page = viewer_page(data);
     write_text(output.string(), page);
     std::printf("view: %zu vertices, %zu triangles%s -> %s (%.1f MB, opens offline in a browser)\n", mesh.vertices.size(),
                 mesh.triangles.size(), shown ? (", " + std::to_string(shown) + " points").c_str() : "", output.c_str(),

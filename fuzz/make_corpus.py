@@ -86,4 +86,16 @@ corner = [q for i in range(18) for j in range(18) for q in ((0.08 * i, 0.08 * j,
 put("fuzz_reconstruct", "plane", recon(0, plane))
 put("fuzz_reconstruct", "corner_imls", recon(2, corner))
 put("fuzz_reconstruct", "corner_far", recon(4, corner))
+# The live view's stream (io/live_stream.hpp): a header, a trajectory point, a removed block and a
+# block of one triangle; and a header alone.
+def live(flags, blocks):
+    header = b"LSLV" + struct.pack("<III", 1, flags, 3) + struct.pack("<3d", 1000.0, 2000.0, 10.0)
+    header += struct.pack("<12f", 1, 0, 0, 3, 0, 1, 0, 4, 0, 0, 1, 0.5) + struct.pack("<III", 1, 1, len(blocks))
+    header += b"\0" * (112 - len(header))
+    return header + struct.pack("<3f", 3, 4, 0.5) + struct.pack("<3i", -1, 2, -3) + b"".join(blocks)
+tri = (struct.pack("<3i", 5, 6, -7) + struct.pack("<II", 3, 1) + struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+       + struct.pack("<3f", 0.5, 0.25, 1.0) + bytes([1, 2, 3, 0]) + struct.pack("<3I", 0, 1, 2))
+put("fuzz_live_stream", "one_block", live(1, [tri]))
+put("fuzz_live_stream", "two_blocks_final", live(2, [tri, tri]))
+put("fuzz_live_stream", "header_only", live(4, []))
 print("corpus written to", root, file=sys.stderr)

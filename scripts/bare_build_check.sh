@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A clone built as a new user builds it: plain `cmake -S . -B build`, no scripts/setup.sh, so no
 # three.js (viewer/node_modules is not in git). Configure must say once that the viewer is left
-# out and how to add it; the CLI must build; `lidarsurf view` must exit 2 with that message and
+# out and how to add it; the CLI must build; `lidarsurf view` and `fuse --serve` must exit 2 with that message and
 # write nothing; the rest of the CLI must work. The tracked files of the working tree are copied
 # (what a clone of this commit holds).
 # Usage: bare_build_check.sh [WORK_DIR] (JOBS in the environment: parallel build jobs)
@@ -29,4 +29,13 @@ set -e
 grep -q "built without the viewer" "$work/view.err" && grep -q "scripts/setup.sh" "$work/view.err" ||
   { cat "$work/view.err"; echo "bare-check: view does not say the viewer is missing and how to add it"; exit 1; }
 [ ! -e "$work/mesh.html" ] || { echo "bare-check: view wrote a page without the viewer"; exit 1; }
-echo "bare-check: configured with one warning, the CLI built without the viewer, view exits 2 saying how to add it"
+# The live view is the same page: fuse --serve exits 2 with the same message, before any work.
+"$cli" simulate --frames 2 --length 80 --gt-beams 0 -o "$work/drive" --quiet >/dev/null
+set +e
+"$cli" fuse "$work/drive" -o "$work/map.ply" --serve 0 --quiet >"$work/serve.out" 2>"$work/serve.err"
+code=$?
+set -e
+[ "$code" = 2 ] && grep -q "built without the viewer" "$work/serve.err" ||
+  { cat "$work/serve.err"; echo "bare-check: fuse --serve exited $code, not 2 with the viewer's message"; exit 1; }
+[ ! -e "$work/map.ply" ] || { echo "bare-check: fuse --serve fused without the viewer"; exit 1; }
+echo "bare-check: configured with one warning, the CLI built without the viewer, view and fuse --serve exit 2 saying how to add it"

@@ -15,6 +15,7 @@ PKGS=(
   libembree-dev        # ray casting: simulator and renderer
   nlohmann-json3-dev   # sensor files (JSON), benchmark results
   libpng-dev           # PNG pictures (render, demo)
+  libboost-dev         # Boost.Beast/Asio: HTTP and WebSocket of the live view (fuse --serve)
   python3-matplotlib   # benchmark plots (Fig. 6)
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
@@ -33,7 +34,7 @@ if [ "${1:-}" = "peers" ]; then PKGS+=(python3-open3d); fi
 if [ "${1:-}" = "pcl" ]; then PKGS+=(libpcl-dev); fi
 # `setup.sh vdbfusion`: OpenVDB for tools/vdbfusion_peer (make map-peers).
 if [ "${1:-}" = "vdbfusion" ]; then PKGS+=(libopenvdb-dev); fi
-# `setup.sh viewer`: Chromium, which renders the viewer's page in its test (make viewer-check).
+# `setup.sh viewer`: Chromium, which renders the viewer's pages in their tests (make viewer-check).
 if [ "${1:-}" = "viewer" ]; then PKGS+=(chromium); fi
 
 missing=()
@@ -56,4 +57,11 @@ viewer="$(cd "$(dirname "$0")/.." && pwd)/viewer"
 if [ ! -f "$viewer/node_modules/three/build/three.min.js" ]; then
   echo "setup: npm ci in $viewer (three.js for lidarsurf view)"
   (cd "$viewer" && npm ci --no-audit --no-fund --loglevel=error)
+fi
+# `setup.sh viewer`: playwright-core (the pinned version of tests/viewer/package-lock.json), which
+# drives Debian's Chromium through the live view in make viewer-check; it downloads no browser.
+tests_viewer="$(cd "$(dirname "$0")/.." && pwd)/tests/viewer"
+if [ "${1:-}" = "viewer" ] && [ ! -d "$tests_viewer/node_modules/playwright-core" ]; then
+  echo "setup: npm ci in $tests_viewer (playwright-core for the live view's check)"
+  (cd "$tests_viewer" && npm ci --no-audit --no-fund --loglevel=error)
 fi

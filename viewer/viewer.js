@@ -1,91 +1,136 @@
-// The viewer of `lidarsurf view`: the mesh (and the input points) from the data block of this
-// file, drawn with three.js (the global THREE of build/three.min.js, inlined above). Orbit with
-// the left button, pan with the right one (or shift), zoom with the wheel. The panel switches the
-// colouring (height, neighbourhood level k', Gaussian confidence), the wireframe and the points;
-// the same settings can be given in the URL's hash: #colour=level&wireframe=1&points=0.
+// The viewer of `lidarsurf view` and `lidarsurf fuse --serve`, drawn with three.js (the global
+// THREE of build/three.min.js, inlined above). Two sources, one viewer:
+//  - a mesh in the page (`view`): the data block holds its arrays;
+//  - a live map (`fuse --serve`, data.live): the page reads the stream at /live of the server
+//    that served it (io/live_stream.hpp has the format): the map so far, then each scan's
+//    changed blocks, the sensor's pose and trajectory; the last message holds the final mesh.
+// Orbit with the left button, pan with the right one (or shift), zoom with the wheel. The panel
+// switches the colouring (height, neighbourhood level k', Gaussian confidence, normal, grey), the
+// wireframe, the points and, live, whether the camera follows the sensor; the URL's hash sets
+// them too: #colour=level&wireframe=1&points=0&follow=0. The surface is lit by its normals.
 (function () {
   "use strict";
   const data = JSON.parse(document.getElementById("lidarsurf-data").textContent);
+  const live = data.live === true;
 
   function decode(b64, Type) {
     if (!b64) return new Type(0);
     const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
     return new Type(bytes.buffer);
   }
-  const positions = decode(data.vertices, Float32Array); // metres, relative to data.centre
-  const indices = decode(data.triangles, Uint32Array);
-  const levels = decode(data.levels, Uint8Array);
-  const confidence = decode(data.confidence, Float32Array);
-  const points = decode(data.points, Float32Array);
-  const nv = positions.length / 3;
 
-  // Colour ramps: height over the 2nd-98th percentile, k' over 1..k_max, confidence over [0, 1].
-  function ramp(t) {
+  // ---- Colourings: height over the 2nd-98th percentile, k' over 1..k_max, confidence over [0, 1].
+  function ramp(t, c) {
     t = Math.min(1, Math.max(0, t));
-    const c = new THREE.Color();
-    c.setHSL(0.66 * (1 - t), 0.75, 0.5);
-    return c;
+    return c.setHSL(0.66 * (1 - t), 0.75, 0.5);
   }
-  const zs = [];
-  for (let i = 0; i < nv; i++) zs.push(positions[3 * i + 2]);
-  zs.sort((a, b) => a - b);
-  const zlo = zs.length ? zs[Math.floor(0.02 * (zs.length - 1))] : 0;
-  const zhi = zs.length ? Math.max(zlo + 1e-6, zs[Math.floor(0.98 * (zs.length - 1))]) : 1;
-  let kmax = 1;
-  for (let i = 0; i < levels.length; i++) kmax = Math.max(kmax, levels[i]);
+  const grey = new THREE.Color(0.7, 0.7, 0.7), none = new THREE.Color(0.6, 0.6, 0.6);
+  const range = { zlo: 0, zhi: 1, kmax: 1 };
   const modes = {
-    height: (i) => ramp((positions[3 * i + 2] - zlo) / (zhi - zlo)),
-    level: (i) => (levels.length ? ramp((levels[i] - 1) / Math.max(1, kmax - 1)) : new THREE.Color(0.6, 0.6, 0.6)),
-    confidence: (i) => (confidence.length ? ramp(confidence[i]) : new THREE.Color(0.6, 0.6, 0.6)),
-    grey: () => new THREE.Color(0.7, 0.7, 0.7),
+    height: (p, i, c) => ramp((p.positions[3 * i + 2] - range.zlo) / (range.zhi - range.zlo), c),
+    level: (p, i, c) => (p.levels.length ? ramp((p.levels[i] - 1) / Math.max(1, range.kmax - 1), c) : c.copy(none)),
+    confidence: (p, i, c) => (p.confidence.length ? ramp(p.confidence[i], c) : c.copy(none)),
+    normal: (p, i, c) => {
+      const n = p.geometry.attributes.normal.array;
+      return c.setRGB(0.5 + 0.5 * n[3 * i], 0.5 + 0.5 * n[3 * i + 1], 0.5 + 0.5 * n[3 * i + 2]);
+    },
+    grey: (p, i, c) => c.copy(grey),
   };
+  const settings = { colour: data.colour in modes ? data.colour : "height", wireframe: false, points: false, follow: true };
+  for (const part of window.location.hash.replace(/^#/, "").split("&")) {
+    const [key, value] = part.split("=");
+    if (key === "colour" && value in modes) settings.colour = value;
+    if (key === "wireframe") settings.wireframe = value === "1";
+    if (key === "points") settings.points = value === "1";
+    if (key === "follow") settings.follow = value !== "0";
+  }
 
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
-  geometry.setIndex(new THREE.BufferAttribute(indices, 1));
-  geometry.computeVertexNormals();
-  const colours = new Float32Array(3 * nv);
-  geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-  const material = new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide });
-  const mesh = new THREE.Mesh(geometry, material);
-
-  const cloud = new THREE.Points(
-    (() => {
-      const g = new THREE.BufferGeometry();
-      g.setAttribute("position", new THREE.BufferAttribute(points, 3));
-      return g;
-    })(),
-    new THREE.PointsMaterial({ color: 0x202020, size: 2, sizeAttenuation: false })
-  );
-
+  // ---- The scene: the surface as pieces (the whole mesh, or the live map's blocks), lit by
+  // their normals: a soft sky and ground light, and a light from behind the camera's shoulder.
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0xf2f4f7);
-  scene.add(mesh, cloud);
-  scene.add(new THREE.AmbientLight(0xffffff, 0.55));
-  const sun = new THREE.DirectionalLight(0xffffff, 0.9);
-  sun.position.set(0.4, 0.5, 1.0);
-  scene.add(sun);
+  const surface = new THREE.Group();
+  scene.add(surface);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x707070, 0.55));
+  const key = new THREE.DirectionalLight(0xffffff, 0.75);
+  scene.add(key, key.target);
+  const material = new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide });
+  const pieces = new Map(); // name -> piece
+  let triangles = 0;
 
+  function colour(p) {
+    const f = modes[settings.colour], c = new THREE.Color(), out = p.geometry.attributes.color.array;
+    for (let i = 0, n = p.positions.length / 3; i < n; i++) {
+      f(p, i, c);
+      out[3 * i] = c.r;
+      out[3 * i + 1] = c.g;
+      out[3 * i + 2] = c.b;
+    }
+    p.geometry.attributes.color.needsUpdate = true;
+  }
+  function addPiece(name, positions, indices, levels, confidence) {
+    removePiece(name);
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
+    geometry.setIndex(new THREE.BufferAttribute(indices, 1));
+    geometry.computeVertexNormals();
+    geometry.setAttribute("color", new THREE.BufferAttribute(new Float32Array(positions.length), 3));
+    const p = { positions, indices, levels, confidence, geometry, object: new THREE.Mesh(geometry, material) };
+    for (let i = 0; i < levels.length; i++) if (levels[i] > range.kmax) range.kmax = levels[i];
+    colour(p);
+    surface.add(p.object);
+    pieces.set(name, p);
+    triangles += indices.length / 3;
+    heights.add(positions, 1);
+  }
+  function removePiece(name) {
+    const p = pieces.get(name);
+    if (!p) return;
+    surface.remove(p.object);
+    p.geometry.dispose();
+    pieces.delete(name);
+    triangles -= p.indices.length / 3;
+    heights.add(p.positions, -1);
+  }
+
+  // Heights of every vertex shown, in 0.25 m bins: the height colouring's range follows the map.
+  const heights = {
+    bins: new Map(),
+    total: 0,
+    add(positions, sign) {
+      for (let i = 2; i < positions.length; i += 3) {
+        const b = Math.floor(positions[i] * 4);
+        this.bins.set(b, (this.bins.get(b) || 0) + sign);
+      }
+      this.total += (sign * positions.length) / 3;
+    },
+    // Sets range.zlo/zhi to the 2nd and 98th percentiles when they moved by over 0.5 m (or at
+    // once when `force`); true when they were set.
+    update(force) {
+      if (this.total <= 0) return false;
+      const keys = [...this.bins.keys()].filter((b) => this.bins.get(b) > 0).sort((a, b) => a - b);
+      let seen = 0, lo = keys[0], hi = keys[keys.length - 1];
+      for (const b of keys) {
+        const before = seen;
+        seen += this.bins.get(b);
+        if (before < 0.02 * this.total && seen >= 0.02 * this.total) lo = b;
+        if (before < 0.98 * this.total && seen >= 0.98 * this.total) hi = b;
+      }
+      const zlo = lo / 4, zhi = Math.max(zlo + 0.5, (hi + 1) / 4);
+      const moved = Math.abs(zlo - range.zlo) > 0.5 || Math.abs(zhi - range.zhi) > 0.5;
+      if (moved || force) (range.zlo = zlo), (range.zhi = zhi);
+      return moved || force;
+    },
+  };
+
+  // ---- The camera: orbit controls, spherical coordinates around a target.
   const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   document.body.appendChild(renderer.domElement);
   const camera = new THREE.PerspectiveCamera(55, 1, 0.05, 5000);
   camera.up.set(0, 0, 1);
-
-  // Orbit controls: spherical coordinates around a target. The first view frames the bulk of the
-  // surface (the median vertex, the 70th percentile of the horizontal spread), not its outliers.
-  function median(axis) {
-    const v = [];
-    for (let i = 0; i < nv; i++) v.push(positions[3 * i + axis]);
-    v.sort((a, b) => a - b);
-    return v.length ? v[Math.floor(v.length / 2)] : 0;
-  }
-  const target = new THREE.Vector3(median(0), median(1), median(2));
-  const spread = [];
-  for (let i = 0; i < nv; i++) spread.push(Math.hypot(positions[3 * i] - target.x, positions[3 * i + 1] - target.y));
-  spread.sort((a, b) => a - b);
-  const size = Math.max(1, spread.length ? 2 * spread[Math.floor(0.7 * (spread.length - 1))] : 10);
-  const view = { azimuth: -2.3, elevation: 0.6, distance: 1.1 * size };
+  const target = new THREE.Vector3();
+  const view = { azimuth: -2.3, elevation: 0.6, distance: 60, size: 60 };
   function place() {
     const ce = Math.cos(view.elevation);
     camera.position.set(
@@ -94,6 +139,10 @@
       target.z + view.distance * Math.sin(view.elevation)
     );
     camera.lookAt(target);
+    // The key light comes from above the camera's left shoulder: faces turned away are darker.
+    const right = new THREE.Vector3().setFromMatrixColumn(camera.matrixWorld, 0);
+    key.position.copy(camera.position).addScaledVector(right, -0.5 * view.distance).add(new THREE.Vector3(0, 0, 0.7 * view.distance));
+    key.target.position.copy(target);
   }
   let drag = null;
   renderer.domElement.addEventListener("contextmenu", (e) => e.preventDefault());
@@ -111,6 +160,7 @@
       const up = new THREE.Vector3().setFromMatrixColumn(camera.matrix, 1);
       const scale = view.distance / renderer.domElement.clientHeight;
       target.addScaledVector(right, -dx * scale).addScaledVector(up, dy * scale);
+      if (live) settings.follow = false, (follow.checked = false);
     } else {
       view.azimuth -= 0.005 * dx;
       view.elevation = Math.min(1.55, Math.max(-1.55, view.elevation + 0.005 * dy));
@@ -121,57 +171,198 @@
     "wheel",
     (e) => {
       e.preventDefault();
-      view.distance = Math.min(10 * size + 10, Math.max(0.1, view.distance * Math.exp(0.001 * e.deltaY)));
+      view.distance = Math.min(10 * view.size + 10, Math.max(0.1, view.distance * Math.exp(0.001 * e.deltaY)));
       draw();
     },
     { passive: false }
   );
 
-  // Settings: the panel and the URL's hash.
-  const settings = { colour: data.colour in modes ? data.colour : "height", wireframe: false, points: false };
-  for (const part of window.location.hash.replace(/^#/, "").split("&")) {
-    const [key, value] = part.split("=");
-    if (key === "colour" && value in modes) settings.colour = value;
-    if (key === "wireframe") settings.wireframe = value === "1";
-    if (key === "points") settings.points = value === "1";
-  }
+  // ---- The panel.
   const select = document.getElementById("colour");
   const wire = document.getElementById("wireframe");
   const pts = document.getElementById("points");
+  const follow = document.getElementById("follow");
+  const info = document.getElementById("info");
+  let cloud = null;
   function apply() {
-    const f = modes[settings.colour];
-    for (let i = 0; i < nv; i++) {
-      const c = f(i);
-      colours[3 * i] = c.r;
-      colours[3 * i + 1] = c.g;
-      colours[3 * i + 2] = c.b;
-    }
-    geometry.attributes.color.needsUpdate = true;
+    for (const p of pieces.values()) colour(p);
     material.wireframe = settings.wireframe;
-    cloud.visible = settings.points && points.length > 0;
+    if (cloud) cloud.visible = settings.points;
     select.value = settings.colour;
     wire.checked = settings.wireframe;
-    pts.checked = cloud.visible;
-    pts.disabled = points.length === 0;
+    pts.checked = !!cloud && settings.points;
+    pts.disabled = !cloud;
+    follow.checked = settings.follow;
     document.body.dataset.colour = settings.colour; // what is shown, for tests
     draw();
   }
   select.addEventListener("change", () => ((settings.colour = select.value), apply()));
   wire.addEventListener("change", () => ((settings.wireframe = wire.checked), apply()));
   pts.addEventListener("change", () => ((settings.points = pts.checked), apply()));
+  follow.addEventListener("change", () => ((settings.follow = follow.checked), sensor && settings.follow && target.copy(sensor.position), draw()));
+  document.getElementById("follow-label").hidden = !live;
 
+  let frame = 0;
   function draw() {
-    const w = window.innerWidth, h = window.innerHeight;
-    renderer.setSize(w, h);
-    camera.aspect = w / h;
-    camera.updateProjectionMatrix();
-    place();
-    renderer.render(scene, camera);
+    if (frame) return;
+    frame = requestAnimationFrame(() => {
+      frame = 0;
+      const w = window.innerWidth, h = window.innerHeight;
+      renderer.setSize(w, h);
+      camera.aspect = w / h;
+      camera.updateProjectionMatrix();
+      place();
+      renderer.render(scene, camera);
+    });
   }
   window.addEventListener("resize", draw);
-  document.getElementById("info").textContent =
-    data.title + ": " + nv.toLocaleString() + " vertices, " + (indices.length / 3).toLocaleString() + " triangles" +
-    (points.length ? ", " + (points.length / 3).toLocaleString() + " points" : "");
+
+  // The mesh the page holds, in world coordinates (for tests and the console).
+  let origin = [0, 0, 0];
+  window.lidarsurf = {
+    mesh() {
+      const positions = [], indices = [];
+      for (const p of pieces.values()) {
+        const base = positions.length / 3;
+        for (let i = 0; i < p.positions.length; i += 3)
+          positions.push(p.positions[i] + origin[0], p.positions[i + 1] + origin[1], p.positions[i + 2] + origin[2]);
+        for (let i = 0; i < p.indices.length; i++) indices.push(p.indices[i] + base);
+      }
+      return { positions, indices };
+    },
+  };
+
+  function describe(state) {
+    const n = (x) => x.toLocaleString();
+    info.textContent = data.title + ": " + (live ? n(scans) + " scans, " : "") + n(triangles) + " triangles" + (state ? " (" + state + ")" : "");
+    document.body.dataset.triangles = String(triangles);
+    document.body.dataset.scans = String(scans);
+    document.body.dataset.state = state || "static";
+  }
+
+  // ---- Source 1: a mesh in the page. The first view frames the bulk of the surface (the
+  // median vertex, the 70th percentile of the horizontal spread), not its outliers.
+  let scans = 0, sensor = null;
+  if (!live) {
+    origin = data.centre || [0, 0, 0];
+    const positions = decode(data.vertices, Float32Array);
+    addPiece("mesh", positions, decode(data.indices || data.triangles, Uint32Array), decode(data.levels, Uint8Array), decode(data.confidence, Float32Array));
+    heights.update(true);
+    for (const p of pieces.values()) colour(p);
+    const nv = positions.length / 3;
+    const median = (axis) => {
+      const v = [];
+      for (let i = 0; i < nv; i++) v.push(positions[3 * i + axis]);
+      v.sort((a, b) => a - b);
+      return v.length ? v[Math.floor(v.length / 2)] : 0;
+    };
+    target.set(median(0), median(1), median(2));
+    const spread = [];
+    for (let i = 0; i < nv; i++) spread.push(Math.hypot(positions[3 * i] - target.x, positions[3 * i + 1] - target.y));
+    spread.sort((a, b) => a - b);
+    view.size = Math.max(1, spread.length ? 2 * spread[Math.floor(0.7 * (spread.length - 1))] : 10);
+    view.distance = 1.1 * view.size;
+    const points = decode(data.points, Float32Array);
+    if (points.length) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute("position", new THREE.BufferAttribute(points, 3));
+      cloud = new THREE.Points(g, new THREE.PointsMaterial({ color: 0x202020, size: 2, sizeAttenuation: false }));
+      scene.add(cloud);
+    }
+    describe("");
+    apply();
+    document.body.dataset.ready = "1";
+    return;
+  }
+
+  // ---- Source 2: the live map. The trajectory as a line, the sensor as an arrow along its x axis.
+  let track = new Float32Array(3 * 1024), trackLength = 0;
+  const trackGeometry = new THREE.BufferGeometry();
+  trackGeometry.setAttribute("position", new THREE.BufferAttribute(track, 3));
+  trackGeometry.setDrawRange(0, 0);
+  scene.add(new THREE.Line(trackGeometry, new THREE.LineBasicMaterial({ color: 0xd62728 })));
+  sensor = new THREE.ArrowHelper(new THREE.Vector3(1, 0, 0), new THREE.Vector3(), 4, 0xd62728, 1.5, 1);
+  sensor.visible = false;
+  scene.add(sensor);
+  function extendTrack(points) {
+    if (3 * trackLength + points.length > track.length) {
+      const grown = new Float32Array(2 * (track.length + points.length));
+      grown.set(track.subarray(0, 3 * trackLength));
+      track = grown;
+      trackGeometry.setAttribute("position", new THREE.BufferAttribute(track, 3));
+    }
+    track.set(points, 3 * trackLength);
+    trackLength += points.length / 3;
+    trackGeometry.attributes.position.needsUpdate = true;
+    trackGeometry.setDrawRange(0, trackLength);
+    trackGeometry.computeBoundingSphere();
+  }
+
+  // One message of the stream (io/live_stream.hpp): header, trajectory, removed keys, blocks.
+  const kReset = 1, kFinal = 2, kMore = 4;
+  let state = "connecting";
+  function receive(buffer) {
+    const dv = new DataView(buffer);
+    const magic = String.fromCharCode(dv.getUint8(0), dv.getUint8(1), dv.getUint8(2), dv.getUint8(3));
+    if (magic !== "LSLV" || dv.getUint32(4, true) !== 1) throw new Error("not a lidarsurf live stream (version 1)");
+    const flags = dv.getUint32(8, true);
+    scans = dv.getUint32(12, true);
+    origin = [dv.getFloat64(16, true), dv.getFloat64(24, true), dv.getFloat64(32, true)];
+    const pose = new Float32Array(buffer, 40, 12);
+    const nTrajectory = dv.getUint32(88, true), nRemoved = dv.getUint32(92, true), nChanged = dv.getUint32(96, true);
+    let at = 112;
+    if (flags & kReset) {
+      for (const name of [...pieces.keys()]) removePiece(name);
+      trackLength = 0;
+    }
+    extendTrack(new Float32Array(buffer, at, 3 * nTrajectory));
+    at += 12 * nTrajectory;
+    const removed = new Int32Array(buffer, at, 3 * nRemoved);
+    at += 12 * nRemoved;
+    for (let i = 0; i < nRemoved; i++) removePiece(removed[3 * i] + "," + removed[3 * i + 1] + "," + removed[3 * i + 2]);
+    for (let b = 0; b < nChanged; b++) {
+      const k = new Int32Array(buffer, at, 3);
+      const nv = dv.getUint32(at + 12, true), nt = dv.getUint32(at + 16, true);
+      at += 20;
+      const positions = new Float32Array(buffer, at, 3 * nv);
+      at += 12 * nv;
+      const confidence = new Float32Array(buffer, at, nv);
+      at += 4 * nv;
+      const levels = new Uint8Array(buffer, at, nv);
+      at += (nv + 3) & ~3;
+      const indices = new Uint32Array(buffer, at, 3 * nt);
+      at += 12 * nt;
+      addPiece(k[0] + "," + k[1] + "," + k[2], positions, indices, levels, confidence);
+    }
+    // The sensor: position and heading (the pose's x axis); the camera follows it when asked.
+    const position = new THREE.Vector3(pose[3], pose[7], pose[11]);
+    sensor.position.copy(position);
+    sensor.setDirection(new THREE.Vector3(pose[0], pose[4], pose[8]).normalize());
+    sensor.visible = true;
+    if (settings.follow) target.copy(position);
+    if (heights.update() || flags & kReset) for (const p of pieces.values()) colour(p);
+    state = flags & kFinal ? "final" : flags & kMore ? "catching up" : "live";
+    describe(state);
+    draw();
+  }
+
+  function connect() {
+    const socket = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/live");
+    socket.binaryType = "arraybuffer";
+    socket.onmessage = (e) => {
+      try {
+        receive(e.data);
+      } catch (err) {
+        describe("stream error: " + err.message);
+        socket.close();
+      }
+    };
+    socket.onclose = () => {
+      if (state !== "final") describe(state === "connecting" ? "no server" : "disconnected");
+    };
+  }
+  describe(state);
   apply();
   document.body.dataset.ready = "1";
+  connect();
 })();

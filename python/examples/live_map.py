@@ -5,7 +5,6 @@ live mesh kept by applying each update's MeshDelta, as a viewer or planner would
 usage: python live_map.py DIR --stop 500 --budget-ms 30 -o live.ply [--exact exact.ply]
 """
 import argparse
-import os
 
 import numpy as np
 
@@ -20,20 +19,14 @@ def main():
     p.add_argument("--budget-ms", type=float, default=30.0)
     p.add_argument("--exact")
     a = p.parse_args()
-    poses = lidarsurf.read_poses(os.path.join(a.sequence, "poses.txt"))
-    scans = sorted(os.listdir(os.path.join(a.sequence, "velodyne")))
-    stop = a.stop or len(scans)
     rec = lidarsurf.Reconstructor()
     live = {}  # block key -> Mesh: the client's copy of the live mesh
-    for i in range(stop):
-        pose = poses[i]
-        points = lidarsurf.read_points(os.path.join(a.sequence, "velodyne", scans[i]))
-        rec.integrate_from(points @ pose[:3, :3].T + pose[:3, 3], pose[:3, 3])
-        delta = rec.update_mesh(budget_ms=a.budget_ms)
-        for key in delta.removed:
+    for update in lidarsurf.fuse_live(a.sequence, budget_ms=a.budget_ms, reconstructor=rec, frames=a.stop):
+        for key in update.delta.removed:
             del live[key]
-        for key, mesh in delta.changed:
+        for key, mesh in update.delta.changed:
             live[key] = mesh
+    stop = update.scan + 1
     # The client's blocks as one mesh (the same triangles as rec.live_mesh()).
     vertices, triangles, base = [], [], 0
     for mesh in live.values():

@@ -9,14 +9,42 @@ numpy in, numpy out; the same Config as the C++ library and the CLI.
 """
 import json as _json
 
-from ._lidarsurf import (Config, Mesh, MeshDelta, Reconstructor, __version__, points_view, read_mesh, read_points,
-                         read_poses, read_rings, reconstruct, rings_from_order, set_simd_level, simd_level,
+import collections as _collections
+import os as _os
+
+from ._lidarsurf import (Config, Mesh, MeshDelta, Reconstructor, __version__, decode_live_message, points_view, read_mesh,
+                         read_points, read_poses, read_rings, reconstruct, rings_from_order, set_simd_level, simd_level,
                          simd_levels, simulate)
 from ._lidarsurf import _evaluate_json, _ring_holdout_json
 
 __all__ = ["Config", "Mesh", "MeshDelta", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "read_rings", "evaluate",
            "ring_holdout", "rings_from_order", "simulate", "points_view", "simd_level", "simd_levels", "set_simd_level",
-           "__version__"]
+           "LiveUpdate", "fuse_live", "decode_live_message", "__version__"]
+
+LiveUpdate = _collections.namedtuple("LiveUpdate", ["scan", "pose", "delta"])
+LiveUpdate.__doc__ = """One scan of fuse_live(): its index in the sequence, the sensor's (4, 4) pose, and the MeshDelta."""
+
+
+def fuse_live(sequence, budget_ms=30.0, reconstructor=None, first=0, frames=0, step=1):
+    """Fuse a sequence (KITTI layout: velodyne/NNNNNN.bin and poses.txt, as `lidarsurf simulate` writes
+    it) scan by scan, yielding a LiveUpdate after each: what `lidarsurf fuse --serve` streams to its
+    page, for a viewer or planner of your own. Apply each delta's `removed`, then its `changed`, to a
+    dict {key: Mesh} to hold the live mesh. Pass a Reconstructor (with your Config) to keep it: its
+    extract_mesh() gives the exact mesh at the end, as `fuse` writes it.
+    """
+    poses = read_poses(_os.path.join(sequence, "poses.txt"))
+    scans = sorted(f for f in _os.listdir(_os.path.join(sequence, "velodyne")) if f.endswith(".bin"))
+    if len(poses) < len(scans):
+        raise ValueError(f"{sequence}: {len(poses)} poses for {len(scans)} scans")
+    indices = list(range(first, len(scans), step))
+    if frames:
+        indices = indices[:frames]
+    rec = reconstructor if reconstructor is not None else Reconstructor()
+    for i in indices:
+        pose = poses[i]
+        points = read_points(_os.path.join(sequence, "velodyne", scans[i]))
+        rec.integrate_from(points @ pose[:3, :3].T + pose[:3, 3], pose[:3, 3])
+        yield LiveUpdate(i, pose, rec.update_mesh(budget_ms=budget_ms))
 
 
 def evaluate(mesh, gt_points, origin=(0.0, 0.0, 0.0), max_range=0.0, threshold=0.1, delta=0.2, seed=1):

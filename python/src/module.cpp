@@ -18,6 +18,7 @@
 #include "lidarsurf/eval/report.hpp"
 #include "lidarsurf/eval/ring_holdout.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
+#include "lidarsurf/io/live_stream.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
 #include "lidarsurf/pipeline.hpp"
@@ -554,6 +555,45 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "Read a KITTI poses file (one 3x4 row-major pose a line) as an (N, 4, 4) float64 array. With `calib`, a KITTI "
         "calib.txt, the poses (KITTI's published ones are the left camera's) become the lidar's: Tr^-1 P Tr. For "
         "Reconstructor.integrate_from(points @ R.T + t, viewpoint=t).");
+
+    m.def(
+        "decode_live_message",
+        [](const py::bytes& data) {
+            live_stream::Message msg;
+            {
+                const std::string_view bytes = data;  // the bytes object stays alive while the GIL is released
+                py::gil_scoped_release release;
+                msg = live_stream::decode({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()});
+            }
+            py::dict d;
+            const std::uint32_t flags = msg.header.flags;
+            d["scans"] = msg.header.scans;
+            d["reset"] = (flags & live_stream::kReset) != 0;
+            d["final"] = (flags & live_stream::kFinal) != 0;
+            d["more"] = (flags & live_stream::kMore) != 0;
+            d["origin"] = py::make_tuple(msg.header.origin.x(), msg.header.origin.y(), msg.header.origin.z());
+            py::array_t<double> pose({py::ssize_t{4}, py::ssize_t{4}});
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) pose.mutable_at(r, c) = msg.header.pose.matrix()(r, c);
+            d["pose"] = pose;
+            py::array_t<double> trajectory({static_cast<py::ssize_t>(msg.trajectory.size()), py::ssize_t{3}});
+            for (std::size_t i = 0; i < msg.trajectory.size(); ++i)
+                for (int a = 0; a < 3; ++a) trajectory.mutable_at(static_cast<py::ssize_t>(i), a) = msg.trajectory[i][a];
+            d["trajectory"] = trajectory;
+            py::list removed, changed;
+            for (const VoxelKey& k : msg.removed) removed.append(py::make_tuple(k.x(), k.y(), k.z()));
+            for (MeshBlock& b : msg.changed) changed.append(py::make_tuple(py::make_tuple(b.key.x(), b.key.y(), b.key.z()), std::move(b.mesh)));
+            d["removed"] = removed;
+            d["changed"] = changed;
+            return d;
+        },
+        py::arg("data"),
+        "Decode one message of the live view's stream (what `lidarsurf fuse --serve` sends at ws://HOST:PORT/live, one "
+        "binary WebSocket message per update; docs/live_view.md) as a dict: 'scans' fused so far; 'reset' (drop every "
+        "block first), 'final' (the drive has ended: the blocks now make the final mesh), 'more' (the update goes on in "
+        "the next message); 'origin'; 'pose' (4x4, the sensor's, world); 'trajectory' ((N, 3) sensor positions not sent "
+        "before); 'removed' [key]; 'changed' [(key, Mesh)], as MeshDelta has them. Raises ValueError for bytes that are "
+        "not such a message.");
 
     m.def(
         "_evaluate_json",

@@ -393,6 +393,57 @@ def test_live_mesh_deltas_applied_in_order_give_the_live_mesh(scan):
         paper.update_mesh()
 
 
+def test_fuse_live_yields_what_the_live_view_streams(scan, tmp_path):
+    # A sequence written by hand: the scan seen from three places along x.
+    os.makedirs(tmp_path / "velodyne")
+    with open(tmp_path / "poses.txt", "w") as poses:
+        for i, x in enumerate((0.0, 5.0, 10.0)):
+            np.hstack([scan, np.zeros((len(scan), 1))]).astype(np.float32).tofile(tmp_path / "velodyne" / f"{i:06d}.bin")
+            poses.write(f"1 0 0 {x} 0 1 0 0 0 0 1 0\n")
+    rec = lidarsurf.Reconstructor()
+    client = {}
+    updates = list(lidarsurf.fuse_live(str(tmp_path), budget_ms=0, reconstructor=rec))
+    assert [u.scan for u in updates] == [0, 1, 2]
+    assert [u.pose[0, 3] for u in updates] == [0.0, 5.0, 10.0]
+    for u in updates:
+        for key in u.delta.removed:
+            del client[key]
+        for key, mesh in u.delta.changed:
+            client[key] = mesh
+    live = rec.live_mesh()
+    assert sum(len(m.triangles) for m in client.values()) == len(live.triangles) > 1000
+    assert [u.scan for u in lidarsurf.fuse_live(str(tmp_path), step=2)] == [0, 2]
+    assert [u.scan for u in lidarsurf.fuse_live(str(tmp_path), first=1, frames=1)] == [1]
+
+
+def test_decode_live_message_reads_the_documented_layout():
+    import struct
+    origin = (1000.0, 2000.0, 10.0)
+    pose = [1, 0, 0, 3.0, 0, 1, 0, 4.0, 0, 0, 1, 0.5]  # 3x4, translation relative to the origin
+    header = b"LSLV" + struct.pack("<III", 1, 1 | 2, 7) + struct.pack("<3d", *origin) + struct.pack("<12f", *pose)
+    header += struct.pack("<III", 1, 1, 1)
+    header += b"\0" * (112 - len(header))
+    trajectory = struct.pack("<3f", 3.0, 4.0, 0.5)
+    removed = struct.pack("<3i", -1, 2, -3)
+    block = struct.pack("<3i", 5, 6, -7) + struct.pack("<II", 3, 1)
+    block += struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<3f", 0.5, 0.25, 1.0) + bytes([1, 2, 3, 0])
+    block += struct.pack("<3I", 0, 1, 2)
+    m = lidarsurf.decode_live_message(header + trajectory + removed + block)
+    assert (m["scans"], m["reset"], m["final"], m["more"]) == (7, True, True, False)
+    assert m["origin"] == origin
+    np.testing.assert_allclose(m["pose"][:3, 3], [1003.0, 2004.0, 10.5])
+    np.testing.assert_allclose(m["trajectory"], [[1003.0, 2004.0, 10.5]])
+    assert m["removed"] == [(-1, 2, -3)]
+    (key, mesh), = m["changed"]
+    assert key == (5, 6, -7)
+    np.testing.assert_allclose(mesh.vertices, [[1000, 2000, 10], [1001, 2000, 10], [1000, 2001, 10]])
+    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2]])
+    np.testing.assert_array_equal(mesh.levels, [1, 2, 3])
+    np.testing.assert_allclose(mesh.confidence, [0.5, 0.25, 1.0])
+    with pytest.raises(ValueError, match="live stream"):
+        lidarsurf.decode_live_message(header + trajectory)  # truncated
+
+
 def test_read_poses_and_the_calibration(tmp_path):
     # Two lidar poses L, a velodyne-to-camera Tr; the file holds KITTI's camera poses Tr L Tr^-1.
     def rot_z(a, t):

@@ -172,4 +172,48 @@ Mesh concatenate(const std::vector<MeshBlock>& blocks) {
     return out;
 }
 
+std::vector<MeshBlock> split_into_blocks(const Mesh& mesh, const Eigen::Vector3d& origin, double voxel_size) {
+    if (!(voxel_size > 0)) throw InvalidArgument("split_into_blocks: voxel_size must be > 0");
+    mesh.check();
+    // Each triangle's block, then the triangles grouped by block in (z, y, x) order.
+    std::vector<std::pair<VoxelKey, std::uint32_t>> owner(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const auto& tri = mesh.triangles[t];
+        const Eigen::Vector3d centroid = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
+        const Eigen::Vector3d lattice = ((centroid - origin) / voxel_size).array().floor();
+        owner[t] = {BlockMap<std::int32_t>::block_of(lattice.cast<std::int32_t>()), static_cast<std::uint32_t>(t)};
+    }
+    std::stable_sort(owner.begin(), owner.end(), [](const auto& a, const auto& b) { return less_zyx(a.first, b.first); });
+    std::vector<MeshBlock> blocks;
+    std::vector<std::uint32_t> local(mesh.vertices.size()), stamp(mesh.vertices.size(), 0);
+    const bool normals = mesh.normals.size() == mesh.vertices.size(), levels = mesh.levels.size() == mesh.vertices.size(),
+               confidence = mesh.confidence.size() == mesh.vertices.size();
+    for (std::size_t begin = 0; begin < owner.size();) {
+        std::size_t end = begin;
+        while (end < owner.size() && same_key(owner[end].first, owner[begin].first)) ++end;
+        MeshBlock& block = blocks.emplace_back();
+        block.key = owner[begin].first;
+        Mesh& m = block.mesh;
+        const auto mark = static_cast<std::uint32_t>(blocks.size());  // this block's stamp (never 0)
+        for (std::size_t i = begin; i < end; ++i) {
+            std::array<std::uint32_t, 3> tri{};
+            for (int c = 0; c < 3; ++c) {
+                const std::uint32_t v = mesh.triangles[owner[i].second][static_cast<std::size_t>(c)];
+                if (stamp[v] != mark) {
+                    stamp[v] = mark;
+                    local[v] = static_cast<std::uint32_t>(m.vertices.size());
+                    m.vertices.push_back(mesh.vertices[v]);
+                    if (normals) m.normals.push_back(mesh.normals[v]);
+                    if (levels) m.levels.push_back(mesh.levels[v]);
+                    if (confidence) m.confidence.push_back(mesh.confidence[v]);
+                }
+                tri[static_cast<std::size_t>(c)] = local[v];
+            }
+            m.triangles.push_back(tri);
+        }
+        begin = end;
+    }
+    return blocks;
+}
+
 }  // namespace lidarsurf

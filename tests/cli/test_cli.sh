@@ -107,6 +107,24 @@ expect 2 "seeded surface" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live --method 
 expect 2 "add --live" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live-check-every 5
 expect 2 "live growth" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live --live-growth -1
 expect 4 "velodyne|cannot|no such" -- "$cli" fuse "$dir/nothere" -o "$dir/x.ply"
+# The live view (fuse --serve): the mesh written is fuse's; after the drive the final map stays
+# served until SIGINT, which then ends it with 0; a second server on the same port is exit 4 before
+# any work; the server's options are checked.
+"$cli" fuse "$seq" -o "$dir/served.ply" --serve 0 --quiet >/dev/null 2>"$dir/serve.log" &
+served=$!
+for _ in $(seq 200); do grep -q "until Ctrl-C" "$dir/serve.log" && break; sleep 0.05; done
+port=$(grep -o '127.0.0.1:[0-9]*' "$dir/serve.log" | head -1 | cut -d: -f2)
+check "fuse --serve says where it serves" -- test -n "$port"
+expect 4 "port is in use" -- "$cli" fuse "$seq" -o "$dir/x.ply" --serve "${port:-1}"
+check "a refused server writes nothing" -- test ! -e "$dir/x.ply"
+kill -INT "$served"; wait "$served"; rc=$?
+check "SIGINT after the drive ends fuse --serve with 0 (got $rc)" -- test "$rc" -eq 0
+check "fuse --serve writes the mesh fuse writes" -- cmp -s "$dir/served.ply" "$dir/fused_plain.ply"
+expect 2 "add --serve" -- "$cli" fuse "$seq" -o "$dir/x.ply" --bind 0.0.0.0
+expect 2 "not an IP address" -- "$cli" fuse "$seq" -o "$dir/x.ply" --serve 0 --bind nowhere
+expect 2 "serve takes a port" -- "$cli" fuse "$seq" -o "$dir/x.ply" --serve 70000
+expect 2 "rate" -- "$cli" fuse "$seq" -o "$dir/x.ply" --rate -1
+expect 2 "seeded surface" -- "$cli" fuse "$seq" -o "$dir/x.ply" --serve 0 --method paper
 mkdir -p "$dir/short/velodyne" && cp "$seq"/velodyne/*.bin "$dir/short/velodyne/" && head -1 "$seq/poses.txt" > "$dir/short/poses.txt"
 expect 3 "1 poses for 2 scans" -- "$cli" fuse "$dir/short" -o "$dir/x.ply"
 rm "$dir/short/poses.txt"

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "analytic_street.hpp"
+#include "town_drive.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/map/live_mesh.hpp"
 #include "lidarsurf/pipeline.hpp"
@@ -20,53 +21,12 @@
 #include "test_util.hpp"
 
 using namespace lidarsurf;
+using lidarsurf::test::Scan;
+using lidarsurf::test::town_drive;
+using lidarsurf::test::Triangle;
+using lidarsurf::test::triangles_of;
 
 namespace {
-
-// A short drive through the town: each frame's scan in the world frame, and where it was seen from.
-struct Scan {
-    std::vector<Eigen::Vector3d> points;
-    Eigen::Vector3d from;
-};
-const std::vector<Scan>& town_drive() {
-    static const std::vector<Scan> scans = [] {
-        sim::SceneConfig scene;
-        scene.length = 120;
-        sim::SimulatorConfig sc;
-        sc.frames = 6;
-        sc.gt_beams = 0;
-        const sim::Simulator simulator(sim::make_world(scene), sc);
-        std::vector<Scan> out;
-        for (std::size_t i = 0; i < simulator.frame_count(); ++i) {
-            const sim::SimulatedFrame f = simulator.frame(i);
-            Scan s{{}, f.pose.translation()};
-            for (const Eigen::Vector3d& p : f.scan.points) s.points.push_back(f.pose * p);
-            out.push_back(std::move(s));
-        }
-        return out;
-    }();
-    return scans;
-}
-
-// A triangle as its three corners, rotated to start at the smallest (the orientation kept): the
-// same triangle whatever the vertex numbering of the mesh it comes from.
-using Corner = std::array<double, 3>;
-using Triangle = std::array<Corner, 3>;
-std::vector<Triangle> triangles_of(const Mesh& m) {
-    std::vector<Triangle> out;
-    out.reserve(m.triangles.size());
-    for (const auto& t : m.triangles) {
-        Triangle tri;
-        for (int k = 0; k < 3; ++k) {
-            const Eigen::Vector3d& p = m.vertices[t[static_cast<std::size_t>(k)]];
-            tri[static_cast<std::size_t>(k)] = {p.x(), p.y(), p.z()};
-        }
-        std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
-        out.push_back(tri);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-}
 
 // The client's copy of the live mesh, kept with nothing of the library but the deltas.
 using KeyTuple = std::tuple<int, int, int>;
@@ -85,7 +45,7 @@ void apply_to(std::map<KeyTuple, Mesh>& client, const MeshDelta& delta) {
 std::vector<Triangle> triangles_of(const std::map<KeyTuple, Mesh>& client) {
     std::vector<Triangle> out;
     for (const auto& [key, mesh] : client) {
-        const std::vector<Triangle> t = triangles_of(mesh);
+        const std::vector<Triangle> t = test::triangles_of(mesh);
         out.insert(out.end(), t.begin(), t.end());
     }
     std::sort(out.begin(), out.end());

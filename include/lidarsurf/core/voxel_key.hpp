@@ -26,6 +26,15 @@ inline std::uint64_t pack_key(const VoxelKey& k) {
            ((static_cast<std::uint64_t>(k.z()) & mask) << 42);
 }
 
+/// The key pack_key packed.
+inline VoxelKey unpack_key(std::uint64_t packed) {
+    auto field = [&](int shift) {
+        const auto v = static_cast<std::int32_t>((packed >> shift) & ((std::uint64_t{1} << 21) - 1));
+        return v > kMaxLatticeIndex ? v - (1 << 21) : v;
+    };
+    return {field(0), field(21), field(42)};
+}
+
 /// splitmix64 finaliser: spreads packed keys over the hash table.
 inline std::uint64_t mix64(std::uint64_t x) {
     x ^= x >> 30;

@@ -87,5 +87,11 @@ private:
 void apply(const MeshDelta& delta, std::vector<MeshBlock>& blocks);
 /// The blocks' meshes one after the other (as LiveMesh::mesh()).
 Mesh concatenate(const std::vector<MeshBlock>& blocks);
+/// A mesh cut into the live mesh's blocks: each triangle goes to the block of the cube holding
+/// its centroid, on the lattice whose vertex (0, 0, 0) is at `origin` (world) with spacing
+/// `voxel_size` (the grid's: VoxelGrid::origin(), ReconstructionConfig::voxel_size). Vertices
+/// and their attributes are copied into each block that uses them; blocks in (z, y, x) key order.
+/// What a viewer of the live mesh is given of the exact mesh, block for block.
+std::vector<MeshBlock> split_into_blocks(const Mesh& mesh, const Eigen::Vector3d& origin, double voxel_size);
 
 }  // namespace lidarsurf
