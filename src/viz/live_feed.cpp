@@ -13,12 +13,12 @@ LiveFeed::LiveFeed(std::size_t max_message_bytes) : max_message_bytes_(max_messa
 
 void LiveFeed::publish(MeshDelta delta, const Eigen::Isometry3d& pose, std::uint32_t scans) {
     const std::lock_guard lock(incoming_mutex_);
-    incoming_.push_back({std::move(delta), pose, scans, false, {}});
+    incoming_.push_back({std::move(delta), pose, scans, std::nullopt});
 }
 
 void LiveFeed::finish(std::vector<MeshBlock> blocks, const Eigen::Isometry3d& pose, std::uint32_t scans) {
     const std::lock_guard lock(incoming_mutex_);
-    incoming_.push_back({{}, pose, scans, true, std::move(blocks)});
+    incoming_.push_back({{}, pose, scans, std::move(blocks)});
 }
 
 void LiveFeed::mark(std::uint64_t key) {
@@ -33,7 +33,7 @@ void LiveFeed::absorb() {
     }
     for (Published& u : updates) {
         if (!has_origin_) origin_ = u.pose.translation(), has_origin_ = true;
-        if (!u.final && (trajectory_.empty() || !(trajectory_.back() == u.pose.translation())))  // the same pose again: no motion
+        if (!u.final_blocks && (trajectory_.empty() || !(trajectory_.back() == u.pose.translation())))  // the same pose again: no motion
             trajectory_.push_back(u.pose.translation());
         pose_ = u.pose;
         scans_ = u.scans;
@@ -43,11 +43,11 @@ void LiveFeed::absorb() {
             blocks_[packed] = {b.key, anchor, live_stream::encode_block(b, origin_)};
             mark(packed);
         };
-        if (u.final) {
+        if (u.final_blocks) {
             // Every block the final mesh does not have is removed; every one it has is sent again.
             for (const auto& [packed, block] : blocks_) mark(packed);
             blocks_.clear();
-            for (MeshBlock& b : u.final_blocks)
+            for (MeshBlock& b : *u.final_blocks)
                 if (!b.mesh.triangles.empty()) put(b);
             finished_ = true;
             continue;

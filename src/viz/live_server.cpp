@@ -58,7 +58,7 @@ struct LiveServerState {
     LiveFeed feed;
     std::set<std::shared_ptr<WsSession>> sessions;  // the io thread's
     std::atomic<bool> kick_pending{false};
-    std::atomic<std::size_t> clients{0}, accepted{0}, dropped{0}, messages{0}, bytes{0};
+    std::atomic<std::size_t> accepted{0}, dropped{0}, messages{0}, bytes{0};
     int port = 0;  // the one listened on (set before the thread starts)
     std::thread thread;
 
@@ -117,7 +117,6 @@ public:
         if (joined_) {
             server_.feed.remove_client(id_);
             server_.sessions.erase(shared_from_this());
-            server_.clients = server_.sessions.size();
         }
         beast::error_code ec;
         beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ec);
@@ -135,7 +134,6 @@ private:
         joined_ = true;
         id_ = server_.feed.add_client();
         server_.sessions.insert(shared_from_this());
-        server_.clients = server_.sessions.size();
         ++server_.accepted;
         read();
         pump();
@@ -283,7 +281,7 @@ void LiveServer::finish(std::vector<MeshBlock> blocks, const Eigen::Isometry3d& 
 }
 
 LiveServer::Stats LiveServer::stats() const {
-    return {impl_->clients.load(), impl_->accepted.load(), impl_->dropped.load(), impl_->messages.load(), impl_->bytes.load()};
+    return {impl_->feed.clients(), impl_->accepted.load(), impl_->dropped.load(), impl_->messages.load(), impl_->bytes.load()};
 }
 
 }  // namespace lidarsurf

@@ -51,8 +51,7 @@ private:
         MeshDelta delta;
         Eigen::Isometry3d pose;
         std::uint32_t scans;
-        bool final;
-        std::vector<MeshBlock> final_blocks;
+        std::optional<std::vector<MeshBlock>> final_blocks;  // finish(): the blocks that replace the live mesh
     };
     struct ClientState {
         std::unordered_set<std::uint64_t> lacks;  // packed keys of the blocks to send (changed or removed)
