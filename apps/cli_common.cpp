@@ -87,6 +87,9 @@ std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig
     guard(field_option(app, "--carve-min-scans", "", c.carve_min_scans,
                        "Carving: scans that must see through a voxel (and more than hit it) before it is removed"));
     guard(field_option(app, "--carve-range", "", c.carve_range, "Carving: test the voxels within this distance of each scan's sensor (metres)"));
+    guard(field_option(app, "--carve-stale-scans", "", c.carve_stale_scans,
+                       "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its "
+                       "plane (0 = never)"));
     return guards;
 }
 

@@ -16,7 +16,7 @@ struct SimulateOptions {
     std::string scene = "town", sensor = "hdl64", output, gt, from, to;
     bool gt_given = false;  // --gt given, even with an empty name (an error)
     bool quiet = false;     // no progress report
-    int frames = 100, gt_beams = 316, moving_cars = 3, pedestrians = 0, cyclists = 0;
+    int frames = 100, gt_beams = 316, moving_cars = 3, pedestrians = 0, cyclists = 0, leaving_cars = 0, parking_cars = 0;
     double length = 240.0;
     std::uint64_t seed = 1;
 };

@@ -50,6 +50,8 @@ sim::World load_world(const SimulateOptions& o) {
     sc.moving_cars = o.moving_cars;
     sc.pedestrians = o.pedestrians;
     sc.cyclists = o.cyclists;
+    sc.leaving_cars = o.leaving_cars;
+    sc.parking_cars = o.parking_cars;
     return sim::make_world(sc);
 }
 
@@ -118,6 +120,8 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
     sc->add_option("--moving-cars", o.moving_cars, "Cars driving in the opposite lane (town)")->capture_default_str();
     sc->add_option("--pedestrians", o.pedestrians, "People walking the sidewalks (town)")->capture_default_str();
     sc->add_option("--cyclists", o.cyclists, "Cyclists riding beside the opposite lane (town)")->capture_default_str();
+    sc->add_option("--leaving-cars", o.leaving_cars, "Cars parked at the curb that drive off mid-drive (town)")->capture_default_str();
+    sc->add_option("--parking-cars", o.parking_cars, "Cars that drive in and park at the curb mid-drive (town)")->capture_default_str();
     sc->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     sc->add_option("--from", o.from, "Mesh scene: ground point where the drive starts, x,y,z");
     sc->add_option("--to", o.to, "Mesh scene: ground point where it ends (default 10 m along +x)");
@@ -157,7 +161,9 @@ int run_simulate(const SimulateOptions& o) {
         fs::create_directories(d, ec);
         if (ec) throw IoError(d.string() + ": cannot create the directory (" + ec.message() + ")");
     }
-    write_mesh(simulator.world().static_mesh, seq.scene());
+    // The scene a map of the drive should hold: what stands at its end (cars that left are not in
+    // it, cars that parked are).
+    write_mesh(simulator.world().standing_at(simulator.world().time_at(1.0)), seq.scene());
     write_text(seq.sensor().string(), cfg.sensor.to_json());
     std::vector<Eigen::Isometry3d> poses;
     std::size_t points = 0;

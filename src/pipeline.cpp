@@ -81,7 +81,8 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     // Free-space carving: on scans seen from a known position (sequences), after the scan's points.
     const bool carving = config_.carve && grid_.has_viewpoints() && seen_from;
-    if (carving && !carver_) carver_.emplace(config_.carve_margin_voxels * config_.voxel_size, config_.carve_min_scans, config_.carve_range);
+    if (carving && !carver_) carver_.emplace(config_.carve_margin_voxels * config_.voxel_size, config_.carve_min_scans, config_.carve_range,
+                                                config_.carve_stale_scans);
     std::vector<VoxelGrid::Hit> hits, chunk_hits;
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
         const std::size_t end = std::min(points.size(), begin + kChunk);

@@ -221,6 +221,9 @@ PYBIND11_MODULE(_lidarsurf, m) {
                        "Carving: scans that must see through a voxel (and more than hit it) before it is removed.")
         .def_readwrite("carve_range", &ReconstructionConfig::carve_range,
                        "Carving: the voxels within this distance (metres) of each scan's sensor are tested against it.")
+        .def_readwrite("carve_stale_scans", &ReconstructionConfig::carve_stale_scans,
+                       "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only "
+                       "by its plane (0: never).")
         .def_readwrite("live_growth", &ReconstructionConfig::live_growth,
                        "Live mesh: a block is meshed again when the points within live_reach_blocks of it changed (inserted or carved) by this fraction, or at once when one of its own voxels was carved.")
         .def_readwrite("live_range", &ReconstructionConfig::live_range,
@@ -243,7 +246,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
               << ", snap_to_plane=" << (c.snap_to_plane ? "True" : "False") << ", min_component_triangles=" << c.min_component_triangles
               << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")
               << ", seed_dilation=" << c.seed_dilation << ", carve=" << (c.carve ? "True" : "False")
-              << ", carve_margin_voxels=" << c.carve_margin_voxels << ", carve_min_scans=" << c.carve_min_scans << ", carve_range=" << c.carve_range
+              << ", carve_margin_voxels=" << c.carve_margin_voxels << ", carve_min_scans=" << c.carve_min_scans << ", carve_range=" << c.carve_range << ", carve_stale_scans=" << c.carve_stale_scans
               << ", live_growth=" << c.live_growth << ", live_range=" << c.live_range << ", live_reach_blocks=" << c.live_reach_blocks
               << ", live_halo_cubes=" << c.live_halo_cubes << ", threads=" << c.threads << ")";
             return o.str();

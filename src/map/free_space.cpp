@@ -45,8 +45,9 @@ inline float elevation_deg(const Eigen::Vector3d& d) {
 
 }  // namespace
 
-FreeSpaceCarver::FreeSpaceCarver(double margin, int min_scans, double range)
-    : margin_(margin), min_scans_(min_scans), range_(range), sigma2_(0) {
+FreeSpaceCarver::FreeSpaceCarver(double margin, int min_scans, double range, int stale_scans)
+    : margin_(margin), min_scans_(min_scans), range_(range), stale_scans_(stale_scans), sigma2_(0) {
+    if (stale_scans < 0) throw InvalidArgument("carving stale scans must be >= 0");
     if (!std::isfinite(range) || range <= 0) throw InvalidArgument("carving range must be finite and > 0");
     if (!std::isfinite(margin) || margin <= 0) throw InvalidArgument("carving margin must be finite and > 0");
     if (min_scans < 1) throw InvalidArgument("carving min scans must be >= 1");
@@ -257,8 +258,11 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
             ++tested;
             const VoxelStats& st = stats[v];
             const Eigen::Vector3d p = grid.to_local(points[nearest[static_cast<std::size_t>(q)]]);
+            // A planar voxel by its plane; a thick or sparse one, a young one (a car seen from
+            // afar) and a stale one (no hit for stale_scans_ scans) by the returns near it.
+            const bool stale = stale_scans_ > 0 && stamp - e.last_hit >= static_cast<std::uint32_t>(stale_scans_);
             if ((e.shape == Shape::Planar && crosses_plane(st, e, s, p)) ||
-                ((e.shape != Shape::Planar || e.hits <= kYoungHits) && passes_near(st, e, s, p) &&
+                ((e.shape != Shape::Planar || e.hits <= kYoungHits || stale) && passes_near(st, e, s, p) &&
                  off_surface(grid, points, st.mean, p, static_cast<std::uint32_t>(q)))) {
                 e.last_pass = stamp;
                 mine.push_back(v);

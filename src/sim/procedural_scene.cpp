@@ -166,6 +166,7 @@ void traffic_sign(MeshBuilder& b, Rng& rng, const V& ground) {
 
 void make_town(World& w, Rng& rng) {
     MeshBuilder b;
+    std::vector<V> free_spots;  // curb spots with no parked car
     const double half = w.config.length / 2;
     const double cross[2] = {-w.config.length / 4, w.config.length / 4};
     auto flat = [](double, double) { return 0.0; };
@@ -191,9 +192,12 @@ void make_town(World& w, Rng& rng) {
                 if (rng.chance(0.6)) tree(b, rng, {tx, side * rng.uniform(7.4, 8.2), kCurb}, false);
             for (double sx = bx0 + 3.0; sx < bx1 - 3.0; sx += rng.uniform(30.0, 50.0))
                 traffic_sign(b, rng, {sx, side * (kRoadHalf + 0.45), kCurb});
-            // Parked cars along the curb, facing the traffic direction of their side.
-            for (double px = bx0 + 4.0; px < bx1 - 4.0; px += rng.uniform(5.8, 7.5))
+            // Parked cars along the curb, facing the traffic direction of their side; the free spots
+            // are where leaving and parking cars stand.
+            for (double px = bx0 + 4.0; px < bx1 - 4.0; px += rng.uniform(5.8, 7.5)) {
                 if (rng.chance(0.55)) place(b, car_body(rng), {px, side * 3.9, 0.0}, side > 0 ? std::numbers::pi : 0.0);
+                else free_spots.push_back({px, side * 3.9, 0.0});
+            }
         }
     }
     w.static_mesh = b.take();
@@ -231,6 +235,30 @@ void make_town(World& w, Rng& rng) {
     }
     const double margin = 35.0;
     for (double x = -half + margin; x <= half - margin + 1e-9; x += 1.0) w.path.push_back({x, -1.75, 0.0});
+    // Cars that leave their spot or park in one, each at its time within the middle half of the
+    // drive, in the traffic direction of their side (drawn after everything else: the other
+    // movers and the static scene of a seed do not change with their counts).
+    const int wanted = w.config.leaving_cars + w.config.parking_cars;
+    if (static_cast<std::size_t>(wanted) > free_spots.size())
+        throw InvalidArgument("the town has " + std::to_string(free_spots.size()) + " free curb spots for " + std::to_string(wanted) +
+                              " leaving and parking cars: lengthen the street or ask for fewer");
+    const double duration = w.time_at(1.0);
+    for (int i = 0; i < wanted; ++i) {
+        const std::size_t k = std::min(free_spots.size() - 1, static_cast<std::size_t>(rng.uniform(0.0, static_cast<double>(free_spots.size()))));
+        const V spot = free_spots[k];
+        free_spots.erase(free_spots.begin() + static_cast<std::ptrdiff_t>(k));
+        Mover m;
+        m.body = car_body(rng);
+        m.motion = i < w.config.leaving_cars ? Mover::Motion::Leaving : Mover::Motion::Parking;
+        m.start = spot;
+        const double side = spot.y() > 0 ? 1.0 : -1.0;
+        m.speed = -side * rng.uniform(6.0, 9.0);  // the curb at +y faces -x, as the parked cars do
+        m.lane_y = side * 1.75;
+        m.when = rng.uniform(0.25, 0.75) * duration;
+        m.x_min = -half + 3;
+        m.x_max = half - 3;
+        w.movers.push_back(std::move(m));
+    }
 }
 
 // ---- Off-road ---------------------------------------------------------------------------
@@ -308,14 +336,35 @@ void SceneConfig::validate() const {
     if (moving_cars < 0 || moving_cars > 100) throw InvalidArgument("moving cars must be in [0, 100]");
     if (pedestrians < 0 || pedestrians > 500) throw InvalidArgument("pedestrians must be in [0, 500]");
     if (cyclists < 0 || cyclists > 100) throw InvalidArgument("cyclists must be in [0, 100]");
+    if (leaving_cars < 0 || leaving_cars > 100 || parking_cars < 0 || parking_cars > 100)
+        throw InvalidArgument("leaving and parking cars must be in [0, 100]");
     if (!(ego_speed > 0 && ego_speed <= 100)) throw InvalidArgument("ego speed must be in (0, 100] m/s");
 }
 
 Eigen::Vector3d Mover::position_at(double t) const {
-    const double span = x_max - x_min;
-    double x = std::fmod(start.x() - x_min + speed * t, span);
-    if (x < 0) x += span;
-    return {x_min + x, start.y(), start.z()};
+    if (motion == Motion::Wrapping) {
+        const double span = x_max - x_min;
+        double x = std::fmod(start.x() - x_min + speed * t, span);
+        if (x < 0) x += span;
+        return {x_min + x, start.y(), start.z()};
+    }
+    const double moving = motion == Motion::Leaving ? t - when : when - t;  // seconds away from the spot
+    if (moving <= 0) return start;
+    const double towards_spot = std::max(0.0, 1.0 - moving / kSwerveSeconds);
+    const double x = start.x() + (motion == Motion::Leaving ? 1.0 : -1.0) * speed * moving;
+    return {x, lane_y + (start.y() - lane_y) * towards_spot, start.z()};
+}
+
+bool Mover::present_at(double t) const {
+    if (motion == Motion::Wrapping) return true;
+    const double x = position_at(t).x();
+    return x >= x_min && x <= x_max;
+}
+
+bool Mover::parked_at(double t) const {
+    if (motion == Motion::Leaving) return t <= when;
+    if (motion == Motion::Parking) return t >= when;
+    return speed == 0;
 }
 
 double World::path_length() const {
@@ -356,7 +405,16 @@ double World::time_at(double s) const { return std::clamp(s, 0.0, 1.0) * path_le
 
 Mesh World::movers_at(double t) const {
     MeshBuilder b;
-    for (const auto& m : movers) place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0);
+    for (const auto& m : movers)
+        if (m.present_at(t)) place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0);
+    return b.take();
+}
+
+Mesh World::standing_at(double t) const {
+    MeshBuilder b;
+    b.append(static_mesh);
+    for (const auto& m : movers)
+        if (m.parked_at(t) && m.present_at(t)) place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0);
     return b.take();
 }
 

@@ -86,6 +86,8 @@ void ReconstructionConfig::validate() const {
     if (!std::isfinite(carve_range) || carve_range <= 0 || carve_range > 1e4)
         fail("carve range must be within (0, 1e4] m (got " + format_value(carve_range) + ")");
     if (carve_min_scans < 1 || carve_min_scans > 65535) fail("carve min scans must be in [1, 65535] (got " + format_value(carve_min_scans) + ")");
+    if (carve_stale_scans < 0 || carve_stale_scans > 65535)
+        fail("carve stale scans must be in [0, 65535] (got " + format_value(carve_stale_scans) + ")");
     if (!std::isfinite(live_growth) || live_growth < 0 || live_growth > 1e3)
         fail("live growth must be within [0, 1e3] (got " + format_value(live_growth) + ")");
     if (!std::isfinite(live_range) || live_range <= 0 || live_range > 1e4)

@@ -1,7 +1,7 @@
 #pragma once
-// An analytic street for the fused-map tests: flat ground, a wall, a thin pole and a car-sized box
-// driving past a moving sensor, scanned by an exact ray caster, so that where each surface is (and
-// where the car was and no longer is) is known exactly.
+// An analytic street for the fused-map tests: flat ground, a wall, a thin pole and boxes (a car
+// driving past, cars parked, a walker) seen by a moving sensor through an exact ray caster, so that
+// where each surface is (and where a box was and no longer is) is known exactly.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -35,8 +35,9 @@ inline std::optional<double> hit_box(const Eigen::Vector3d& s, const Eigen::Vect
     return t0 <= t1 && t0 > 0 ? std::optional<double>(t0) : std::nullopt;
 }
 
-// One scan: 0.4 degree azimuth, 0.5 degree elevation from -24 to +2 degrees, returns within 40 m.
-inline std::vector<Eigen::Vector3d> scan(int i, bool with_car) {
+// One scan with `boxes` standing in the street: 0.4 degree azimuth, 0.5 degree elevation from -24
+// to +2 degrees, returns within 40 m.
+inline std::vector<Eigen::Vector3d> scan_with(int i, const std::vector<Box>& boxes) {
     const Eigen::Vector3d s = sensor_at(i);
     std::vector<Eigen::Vector3d> points;
     for (double el = -24.0; el <= 2.0; el += 0.5)
@@ -53,11 +54,15 @@ inline std::vector<Eigen::Vector3d> scan(int i, bool with_car) {
                 const double tp = (-qb - std::sqrt(disc)) / (2 * qa);
                 if (tp > 0 && s.z() + tp * u.z() < 6.0) t = std::min(t, tp);
             }
-            if (with_car)
-                if (const auto tc = hit_box(s, u, car_at(i))) t = std::min(t, *tc);
+            for (const Box& b : boxes)
+                if (const auto tb = hit_box(s, u, b)) t = std::min(t, *tb);
             if (t <= 40.0) points.push_back(s + t * u);
         }
     return points;
+}
+// The scan with the driving car, or without it.
+inline std::vector<Eigen::Vector3d> scan(int i, bool with_car) {
+    return with_car ? scan_with(i, {car_at(i)}) : scan_with(i, {});
 }
 
 inline bool in_trail(const Eigen::Vector3d& p, int last) {  // where the car was, away from where it ends

@@ -33,6 +33,26 @@ Counts count(const VoxelGrid& grid, int last) {
 
 constexpr int kScans = 24;
 
+// Mesh triangles whose centroid lies in `b` (grown by `grow`, above `z_min`).
+std::size_t triangles_in(const Mesh& m, const Box& b, double grow = 0, double z_min = -1e9) {
+    std::size_t n = 0;
+    for (const auto& t : m.triangles) {
+        const Eigen::Vector3d c = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0;
+        n += (c.array() > b.lo.array() - grow).all() && (c.array() < b.hi.array() + grow).all() && c.z() > z_min;
+    }
+    return n;
+}
+
+// The map of a 40-scan drive with `boxes_at(i)` standing in the street at scan i, carved or not.
+template <typename F>
+Mesh fused(bool carve, F&& boxes_at) {
+    ReconstructionConfig c;
+    c.carve = carve;
+    Reconstructor rec(c, sensor_at(0));
+    for (int i = 0; i < 40; ++i) rec.integrate(scan_with(i, boxes_at(i)), sensor_at(i));
+    return rec.extract_mesh();
+}
+
 }  // namespace
 
 TEST(FreeSpace, CarvesAMovingCarsTrailAndKeepsTheGroundTheWallAndAPole) {
@@ -127,4 +147,43 @@ TEST(FreeSpace, RejectsBadParameters) {
     c = {};
     c.carve_range = -1;
     EXPECT_THROW(c.validate(), InvalidArgument);
+    c = {};
+    c.carve_stale_scans = -1;
+    EXPECT_THROW(c.validate(), InvalidArgument);
+    EXPECT_THROW(FreeSpaceCarver(0.4, 2, 40.0, -1), InvalidArgument);
+}
+
+// A car parked for the first half of the drive, then gone; another parked all along; the pole. The
+// oracle is the same drive fused without carving, and the boxes themselves. What is left of the car
+// that went is its roof, at the sensor's height: the rays that would pass through it return from
+// beyond the 40 m range, or not at all, so no scan gives evidence there.
+TEST(FreeSpace, ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays) {
+    const Box gone{{8.0, 2.1, 0.0}, {12.5, 3.9, 1.5}}, stays{{20.0, -3.9, 0.0}, {24.5, -2.1, 1.5}};
+    const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{stays, gone} : std::vector<Box>{stays}; };
+    const Mesh carved = fused(true, boxes), kept = fused(false, boxes);
+    const Box where_it_stood{{8.0, 2.1, 0.3}, {12.5, 3.9, 1.6}};
+    const std::size_t left = triangles_in(carved, where_it_stood), before = triangles_in(kept, where_it_stood);
+    ASSERT_GT(before, 200u);
+    EXPECT_LT(left, before / 2) << "most of the car that left is carved";
+    // The car parked all along and the pole keep their surfaces.
+    const std::size_t on_car = triangles_in(carved, stays, 0.1, 0.2), on_car_kept = triangles_in(kept, stays, 0.1, 0.2);
+    ASSERT_GT(on_car_kept, 300u);
+    EXPECT_GE(on_car, on_car_kept * 98 / 100);
+    const Box pole{{kPoleX - 0.25, kPoleY - 0.25, 0.3}, {kPoleX + 0.25, kPoleY + 0.25, 5.5}};
+    ASSERT_GT(triangles_in(kept, pole), 10u);
+    EXPECT_GE(triangles_in(carved, pole), triangles_in(kept, pole) * 9 / 10);
+}
+
+// A walker crossing 1 m in front of the wall: most of what it leaves where it walked is carved.
+TEST(FreeSpace, AWalkersPathInFrontOfTheWallIsMostlyCarved) {
+    const auto walker = [](int i) { return Box{{2.0 + 0.15 * i, 7.5, 0.0}, {2.5 + 0.15 * i, 8.0, 1.8}}; };
+    const auto boxes = [&](int i) { return std::vector<Box>{walker(i)}; };
+    const Mesh carved = fused(true, boxes), kept = fused(false, boxes);
+    const Box path{{2.0, 7.5, 0.3}, {walker(39).lo.x() - 0.6, 8.0, 1.8}};  // away from where it ends
+    const std::size_t left = triangles_in(carved, path), before = triangles_in(kept, path);
+    ASSERT_GT(before, 300u);
+    EXPECT_LT(left, before / 3);
+    // The wall behind it stays.
+    const Box wall{{-5.0, kWallY - 0.2, 0.3}, {20.0, kWallY + 0.2, 3.0}};
+    EXPECT_GE(triangles_in(carved, wall), triangles_in(kept, wall) * 98 / 100);
 }

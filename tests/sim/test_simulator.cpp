@@ -103,6 +103,47 @@ TEST(ProceduralScene, PedestriansWalkTheSidewalksAndCyclistsRideTheRoadClearOfEv
     }
 }
 
+TEST(ProceduralScene, LeavingCarsDriveOffAndParkingCarsStayWhatStandsAtTheEnd) {
+    SceneConfig c = small(SceneKind::Town);
+    c.leaving_cars = 2;
+    c.parking_cars = 2;
+    const World w = make_world(c);
+    ASSERT_EQ(w.movers.size(), 3u + 4u);
+    // The same street and moving cars as without them (drawn after everything else).
+    const World plain = make_world(small(SceneKind::Town));
+    EXPECT_EQ(plain.static_mesh.vertices, w.static_mesh.vertices);
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(plain.movers[i].start, w.movers[i].start);
+    const double end = w.time_at(1.0);
+    const MeshScene scene(w.static_mesh);
+    for (std::size_t i = 3; i < w.movers.size(); ++i) {
+        const Mover& m = w.movers[i];
+        const bool leaving = i < 5;
+        EXPECT_EQ(m.motion, leaving ? Mover::Motion::Leaving : Mover::Motion::Parking);
+        EXPECT_GT(m.when, 0.25 * end - 1e-9);
+        EXPECT_LT(m.when, 0.75 * end + 1e-9);
+        // At its spot (the curb, |y| = 3.9) while parked, in its lane 1.5 s away from it, then
+        // moving at its speed; the spot is free of the static parked cars.
+        EXPECT_EQ(m.position_at(leaving ? m.when - 5 : m.when + 5), m.start);
+        EXPECT_NEAR(std::abs(m.start.y()), 3.9, 1e-12);
+        EXPECT_FALSE(scene.intersect(m.start + Eigen::Vector3d(0, 0, 1.0), -Eigen::Vector3d::UnitZ(), 0.9)) << "the spot is taken";
+        const double away = leaving ? m.when + 2 : m.when - 2;
+        EXPECT_NEAR(m.position_at(away).y(), m.lane_y, 1e-12);
+        EXPECT_NEAR(std::abs(m.position_at(away).x() - m.start.x()), 2 * std::abs(m.speed), 1e-9);
+        EXPECT_EQ(m.parked_at(leaving ? m.when - 1 : m.when + 1), true);
+        EXPECT_EQ(m.parked_at(leaving ? m.when + 1 : m.when - 1), false);
+        // A leaving car is gone once past the street; a parking car is not there before it came.
+        const double far = leaving ? m.when + 1e3 : m.when - 1e3;
+        EXPECT_FALSE(m.present_at(far));
+    }
+    // What stands at the end: the static mesh and the cars that parked (not those that left).
+    const Mesh car0 = w.movers[5].body, car1 = w.movers[6].body;
+    EXPECT_EQ(w.standing_at(end).triangles.size(), w.static_mesh.triangles.size() + car0.triangles.size() + car1.triangles.size());
+    const Mesh start = w.standing_at(0.0);
+    EXPECT_EQ(start.triangles.size(), w.static_mesh.triangles.size() + w.movers[3].body.triangles.size() + w.movers[4].body.triangles.size());
+    c.leaving_cars = 100;
+    EXPECT_THROW(make_world(c), InvalidArgument);
+}
+
 TEST(Simulator, ReturnsLieOnTheSceneSurface) {
     for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
         SimulatorConfig cfg;

@@ -48,8 +48,9 @@ public:
     static constexpr int kYoungHits = 2;
 
     /// `margin` in metres (> 0); `min_scans` >= 1; voxels farther than `range` (metres, > 0)
-    /// from a scan's viewpoint are not tested against it.
-    FreeSpaceCarver(double margin, int min_scans, double range);
+    /// from a scan's viewpoint are not tested against it; a planar voxel not hit for
+    /// `stale_scans` scans (> 0) is tested as a thick one is (ReconstructionConfig::carve_stale_scans).
+    FreeSpaceCarver(double margin, int min_scans, double range, int stale_scans = 0);
 
     /// After `grid.insert(points, viewpoint, &hits)` of one scan: counts the hits, tests the
     /// voxels within range against the scan's returns seen from `viewpoint` (world), counts the
@@ -95,6 +96,7 @@ private:
     double margin_;
     int min_scans_;
     double range_;
+    int stale_scans_;
     double sigma2_;  // sigma0^2, set from the grid's voxel size
     std::uint32_t scan_ = 0;
     int rows_ = 0;  // rows of the range image of the scan being carved

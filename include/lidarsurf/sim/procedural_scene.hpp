@@ -31,18 +31,35 @@ struct SceneConfig {
     int moving_cars = 3;      ///< town: cars in the opposite lane
     int pedestrians = 0;      ///< town: people walking the sidewalks, both ways (1.1-1.7 m/s)
     int cyclists = 0;         ///< town: bicycles beside the opposite lane, in the drive's direction (4-6.5 m/s)
+    int leaving_cars = 0;     ///< town: cars parked at the curb that pull out and drive off, each at its time within the drive
+    int parking_cars = 0;     ///< town: cars that drive in and park at the curb, each at its time within the drive
     double ego_speed = 8.0;   ///< m/s of the sensor rig along the path (sets the frame times)
 
     void validate() const;
 };
 
-/// A rigid object that moves in a straight line at constant speed, wrapping along the street.
+/// A rigid object that moves along the street at constant speed:
+///  - Wrapping: in a straight line from `start` (its position at t = 0), wrapping within
+///    [x_min, x_max];
+///  - Leaving: parked at `start` until `when`, then it pulls out into the lane at `lane_y` (over
+///    kSwerveSeconds) and drives off, gone once past [x_min, x_max];
+///  - Parking: it drives in along the lane, pulls over in the last kSwerveSeconds and stands at
+///    `start` from `when` on; not on the street before it enters [x_min, x_max].
 struct Mover {
+    enum class Motion { Wrapping, Leaving, Parking };
+    static constexpr double kSwerveSeconds = 1.5;
     Mesh body;                  ///< in its own frame, x forward
-    Eigen::Vector3d start;      ///< position at t = 0
+    Eigen::Vector3d start;      ///< see Motion
     double speed = 0;           ///< m/s along x (negative: driving towards -x)
-    double x_min = 0, x_max = 0;  ///< the street span it wraps within
+    double x_min = 0, x_max = 0;  ///< the street span
+    Motion motion = Motion::Wrapping;
+    double when = 0;            ///< Leaving: when it pulls out; Parking: when it stands at `start` (s)
+    double lane_y = 0;          ///< Leaving, Parking: the lane it drives in
     Eigen::Vector3d position_at(double t) const;
+    /// Whether it is on the street at time t (a car that left, or one not come yet, is not).
+    bool present_at(double t) const;
+    /// Whether it stands still at time t (parked).
+    bool parked_at(double t) const;
 };
 
 struct World {
@@ -63,6 +80,9 @@ struct World {
     Mesh movers_at(double t) const;
     /// The whole scene at time t: static mesh + movers.
     Mesh scene_at(double t) const;
+    /// What stands still at time t: the static mesh and the movers parked then. At the end of the
+    /// drive (time_at(1)), the scene a map of the drive should hold.
+    Mesh standing_at(double t) const;
 };
 
 World make_world(const SceneConfig& config);

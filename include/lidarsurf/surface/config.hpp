@@ -81,6 +81,11 @@ struct ReconstructionConfig {
     double carve_margin_voxels = 2.0;  ///< how far behind a voxel's surface a return must be
     int carve_min_scans = 2;           ///< passes needed before a voxel can be carved
     double carve_range = 40.0;         ///< metres: voxels farther from a scan's viewpoint are not tested against it
+    /// A planar voxel no scan has hit for this many scans is tested as a thick one is (a return
+    /// near it by its own spread and off every surface), not only by its plane: a surface that
+    /// stood and is gone (a parked car that drove off, a walker's legs), whose plane the grazing
+    /// rays of the road never cross. 0: planar voxels only by their plane.
+    int carve_stale_scans = 6;
     /// The live mesh (Reconstructor::update_mesh, docs/method.md "Live mesh"): a block of the
     /// map is re-meshed when one of its voxels was removed, or when the points within
     /// live_reach_blocks blocks of it changed (inserted or removed) by live_growth (a fraction of
