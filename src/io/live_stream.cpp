@@ -171,10 +171,7 @@ Message decode(std::span<const std::uint8_t> bytes) {
 
 void apply(const Message& message, std::vector<MeshBlock>& blocks) {
     if (message.header.flags & kReset) blocks.clear();
-    MeshDelta delta;
-    delta.removed = message.removed;
-    delta.changed = message.changed;
-    lidarsurf::apply(delta, blocks);
+    lidarsurf::apply(message.removed, message.changed, blocks);
 }
 
 }  // namespace lidarsurf::live_stream

@@ -145,13 +145,15 @@ std::size_t LiveMesh::memory_bytes() const {
     return bytes;
 }
 
-void apply(const MeshDelta& delta, std::vector<MeshBlock>& blocks) {
+void apply(const MeshDelta& delta, std::vector<MeshBlock>& blocks) { apply(delta.removed, delta.changed, blocks); }
+
+void apply(std::span<const VoxelKey> removed, std::span<const MeshBlock> changed, std::vector<MeshBlock>& blocks) {
     auto find = [&](const VoxelKey& key) {
         return std::lower_bound(blocks.begin(), blocks.end(), key, [](const MeshBlock& b, const VoxelKey& k) { return less_zyx(b.key, k); });
     };
-    for (const VoxelKey& key : delta.removed)
+    for (const VoxelKey& key : removed)
         if (auto it = find(key); it != blocks.end() && same_key(it->key, key)) blocks.erase(it);
-    for (const MeshBlock& block : delta.changed) {
+    for (const MeshBlock& block : changed) {
         auto it = find(block.key);
         if (it != blocks.end() && same_key(it->key, block.key)) it->mesh = block.mesh;
         else blocks.insert(it, block);

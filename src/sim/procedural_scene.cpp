@@ -403,10 +403,15 @@ Eigen::Isometry3d World::pose_at(double s, double mount_height) const {
 
 double World::time_at(double s) const { return std::clamp(s, 0.0, 1.0) * path_length() / config.ego_speed; }
 
+namespace {
+// A mover's body where it is at time t, facing the way it drives.
+void place_mover(MeshBuilder& b, const Mover& m, double t) { place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0); }
+}  // namespace
+
 Mesh World::movers_at(double t) const {
     MeshBuilder b;
     for (const auto& m : movers)
-        if (m.present_at(t)) place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0);
+        if (m.present_at(t)) place_mover(b, m, t);
     return b.take();
 }
 
@@ -414,7 +419,7 @@ Mesh World::standing_at(double t) const {
     MeshBuilder b;
     b.append(static_mesh);
     for (const auto& m : movers)
-        if (m.parked_at(t) && m.present_at(t)) place(b, m.body, m.position_at(t), m.speed < 0 ? std::numbers::pi : 0.0);
+        if (m.parked_at(t)) place_mover(b, m, t);  // parked: at its spot, on the street
     return b.take();
 }
 

@@ -96,30 +96,35 @@ std::optional<std::string> LiveFeed::next_message(Client client) {
     if (!c.joined && c.lacks.empty() && c.trajectory_sent == trajectory_.size() && !final_due) return std::nullopt;
 
     // The blocks it lacks, nearest the sensor first, until the message is full (one at least).
-    std::vector<std::pair<double, std::uint64_t>> order;
+    struct Lacked {
+        double distance2;     // -1 for a removal: removals first
+        std::uint64_t packed;
+        const Block* block;   // nullptr: removed
+    };
+    std::vector<Lacked> order;
     order.reserve(c.lacks.size());
     const Eigen::Vector3d sensor = pose_.translation();
     for (const std::uint64_t packed : c.lacks) {
         const auto b = blocks_.find(packed);
-        order.emplace_back(b == blocks_.end() ? -1.0 : (b->second.anchor - sensor).squaredNorm(), packed);  // removals first
+        const Block* block = b == blocks_.end() ? nullptr : &b->second;
+        order.push_back({block ? (block->anchor - sensor).squaredNorm() : -1.0, packed, block});
     }
-    std::sort(order.begin(), order.end());
+    std::sort(order.begin(), order.end(), [](const Lacked& a, const Lacked& b) {
+        return a.distance2 < b.distance2 || (a.distance2 == b.distance2 && a.packed < b.packed);
+    });
     std::vector<VoxelKey> removed;
     std::vector<const std::string*> changed;
     std::size_t bytes = live_stream::kHeaderBytes + 12 * (trajectory_.size() - c.trajectory_sent);
     std::size_t taken = 0;
     for (; taken < order.size(); ++taken) {
-        const auto b = blocks_.find(order[taken].second);
-        const std::size_t size = b == blocks_.end() ? 12 : b->second.encoded.size();
+        const Lacked& l = order[taken];
+        const std::size_t size = l.block ? l.block->encoded.size() : 12;
         if (taken > 0 && bytes + size > max_message_bytes_) break;
         bytes += size;
-        if (b == blocks_.end()) {
-            removed.push_back(unpack_key(order[taken].second));
-        } else {
-            changed.push_back(&b->second.encoded);
-        }
+        if (l.block) changed.push_back(&l.block->encoded);
+        else removed.push_back(unpack_key(l.packed));
     }
-    for (std::size_t i = 0; i < taken; ++i) c.lacks.erase(order[i].second);
+    for (std::size_t i = 0; i < taken; ++i) c.lacks.erase(order[i].packed);
 
     live_stream::Header header;
     header.origin = origin_;

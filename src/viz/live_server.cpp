@@ -90,7 +90,7 @@ public:
 
     // Sends the next message when none is on its way.
     void pump() {
-        if (closed_ || writing_ || !joined_) return;
+        if (closed_ || writing_ || !joined()) return;
         std::optional<std::string> message = server_.feed.next_message(id_);
         if (!message) return;
         out_ = std::move(*message);
@@ -114,7 +114,7 @@ public:
         if (closed_) return;
         closed_ = true;
         if (error) ++server_.dropped;
-        if (joined_) {
+        if (joined()) {
             server_.feed.remove_client(id_);
             server_.sessions.erase(shared_from_this());
         }
@@ -131,7 +131,6 @@ private:
             ws_.async_close(websocket::close_code::try_again_later, [self = shared_from_this()](beast::error_code) { self->drop(false); });
             return;
         }
-        joined_ = true;
         id_ = server_.feed.add_client();
         server_.sessions.insert(shared_from_this());
         ++server_.accepted;
@@ -152,8 +151,10 @@ private:
     beast::flat_buffer in_;
     std::string out_;
     net::steady_timer timer_;
+    bool joined() const { return id_ != 0; }  // the feed's clients are numbered from 1
+
     LiveFeed::Client id_ = 0;
-    bool joined_ = false, writing_ = false, closed_ = false;
+    bool writing_ = false, closed_ = false;
 };
 
 // One HTTP request: the page, the WebSocket's upgrade, or a refusal; then the connection ends.

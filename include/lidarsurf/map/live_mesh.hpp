@@ -16,6 +16,7 @@
 // The live mesh keeps every piece (the final extraction's min_component_triangles filter needs
 // the whole map). The exact mesh stays Reconstructor::extract_mesh().
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -85,6 +86,8 @@ private:
 /// Applies `delta` to a live mesh kept as blocks (key -> mesh): what a client of the updates
 /// (a viewer, a planner) does. Blocks in (z, y, x) key order.
 void apply(const MeshDelta& delta, std::vector<MeshBlock>& blocks);
+/// The same for removed keys and changed blocks held elsewhere (a decoded stream message).
+void apply(std::span<const VoxelKey> removed, std::span<const MeshBlock> changed, std::vector<MeshBlock>& blocks);
 /// The blocks' meshes one after the other (as LiveMesh::mesh()).
 Mesh concatenate(const std::vector<MeshBlock>& blocks);
 /// A mesh cut into the live mesh's blocks: each triangle goes to the block of the cube holding

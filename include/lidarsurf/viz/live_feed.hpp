@@ -24,7 +24,7 @@ namespace lidarsurf {
 
 class LiveFeed {
 public:
-    using Client = std::uint64_t;
+    using Client = std::uint64_t;  ///< never 0
 
     /// A catch-up is cut into messages of about this many bytes (one block at least).
     explicit LiveFeed(std::size_t max_message_bytes = std::size_t{4} << 20);
