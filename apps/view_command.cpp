@@ -57,15 +57,15 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
     v->add_option("-o,--output", o.output, "Output page (.html; default: the mesh's name with .html)");
     v->add_option("--points", o.points, "Also show these points (any format reconstruct reads; the mesh's frame)");
     v->add_option("--max-points", o.max_points, "Show at most this many of them (every n-th)")->capture_default_str();
-    v->add_option("--colour,--color", o.colour, "Colouring when the page opens: height | level | confidence | grey")->capture_default_str();
+    v->add_option("--colour,--color", o.colour, "Colouring when the page opens: height | level | confidence | normal | grey")->capture_default_str();
     v->add_option("--title", o.title, "Title of the page (default: the mesh's file name)");
     return v;
 }
 
 int run_view(const ViewOptions& o) {
     require_viewer();
-    if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "grey")
-        throw InvalidArgument("--colour must be height, level, confidence or grey (got '" + o.colour + "')");
+    if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "normal" && o.colour != "grey")
+        throw InvalidArgument("--colour must be height, level, confidence, normal or grey (got '" + o.colour + "')");
     if (o.max_points < 1) throw InvalidArgument("--max-points must be >= 1");
     const fs::path output = o.output.empty() ? fs::path(o.input).replace_extension(".html") : fs::path(o.output);
     const std::string ext = extension_of(output);

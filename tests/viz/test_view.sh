@@ -35,6 +35,8 @@ assert all(abs(v0[a] + data["centre"][a] - first[a]) < 1e-3 for a in range(3)), 
 PY
 expect 2 "\.html" -- "$cli" view "$dir/mesh.ply" -o "$dir/mesh.png"
 expect 2 "colour" -- "$cli" view "$dir/mesh.ply" --colour rainbow
+expect 0 "triangles" -- "$cli" view "$dir/mesh.ply" -o "$dir/normal.html" --colour normal   # every colouring the page has
+grep -q '"colour":"normal"' "$dir/normal.html" || { echo "FAIL: --colour normal not in the page"; fail=$((fail + 1)); }
 ln -s "$dir/mesh.ply" "$dir/alias.html"
 expect 2 "is the input" -- "$cli" view "$dir/mesh.ply" -o "$dir/alias.html"
 printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n' > "$dir/points.ply"
