@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-pcl map-peers install package-check pip-check viewer-check bare-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-sensors accuracy-pcl map-peers install package-check pip-check viewer-check bare-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -72,6 +72,14 @@ accuracy: build
 	/usr/bin/python3 scripts/peers_open3d.py $(ACCURACY_DIR)/town
 	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --peers $(ACCURACY_DIR)/town/peers --out $(ACCURACY_DIR)/table
 	$(BUILD)/bin/lidarsurf benchmark $(ACCURACY_DIR)/town --ablation --no-plots --out $(ACCURACY_DIR)/ablation
+
+# Every sensor preset on the town and the off-road scene (docs/benchmarks.md, "Every lidar"): the
+# default, the paper's AN+GC and the Open3D peers on the same frames, within 30 m. PCL joins with
+# PCL_PEER=$(PCL_BUILD)/bin/lidarsurf_pcl_peer after `make accuracy-pcl`.
+SENSORS_DIR ?= $(BUILD)/accuracy-sensors
+accuracy-sensors: build
+	@bash scripts/setup.sh peers
+	bash scripts/accuracy_sensors.sh $(BUILD)/bin/lidarsurf $(SENSORS_DIR)
 
 # PCL's MLS + greedy projection as one more peer (PCL is heavy: its own build directory, not in make
 # test). Run after `make accuracy`, then re-run its benchmark line to get the PCL row.

@@ -75,6 +75,10 @@ std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig
                        "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"));
     guard(field_option(app, "--slab-radial-extension", "--slab-radial", c.slab_radial_extension,
                        "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"));
+    guard(field_option(app, "--bridge-reach", "", c.bridge_reach,
+                       "Single scans, AN+GC: a vertex no level defines is bridged between the scan rings within this many voxels "
+                       "beyond k_max on each side, at a confidence below tau (0 = off)"));
+    guard(field_option(app, "--bridge-range", "", c.bridge_range, "Bridges are tried within this horizontal distance of the sensor (metres)"));
     guard(field_option(app, "--truncation-voxels", "--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"));
     guard(field_option(app, "--snap-to-plane", "--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"));
     guard(field_option(app, "--seeded-surface", "--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"));

@@ -81,6 +81,7 @@ int run_map_benchmark(const MapBenchmarkOptions& o);
 struct ViewOptions {
     std::string input, output, points, colour = "height", title;
     int max_points = 200000;
+    double tau = 0.2;  ///< the mesh's tau: the confidence colouring marks the vertices below it (inferred surface)
 };
 CLI::App* add_view_command(CLI::App& app, ViewOptions& o);
 int run_view(const ViewOptions& o);

@@ -2,6 +2,7 @@
 // mesh and optionally the input points as base64 arrays in the page, three.js and the viewer's
 // script inlined (viewer/, embedded at build time by cmake/embed_viewer.cmake).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -13,6 +14,7 @@
 #include "file_roles.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/io/point_reader.hpp"
 #include "viewer_page.hpp"
 
@@ -51,7 +53,8 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
         "  lidarsurf view mesh.ply                               (writes mesh.html)\n"
         "  lidarsurf view mesh.ply -o scan.html --points scan.bin --colour level\n"
         "In the page: orbit with the left button, pan with the right one (or shift), zoom with the wheel;\n"
-        "the panel colours by height, neighbourhood level k' or confidence, and toggles the wireframe and\n"
+        "the panel colours by height, neighbourhood level k', confidence (magenta: below tau, inferred surface)\n"
+        "or normal, and toggles the wireframe and\n"
         "the input points. The URL's hash sets them too: mesh.html#colour=level&wireframe=1&points=1.\n");
     v->add_option("input", o.input, "Mesh (.ply, .obj)")->required();
     v->add_option("-o,--output", o.output, "Output page (.html; default: the mesh's name with .html)");
@@ -59,6 +62,11 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
     v->add_option("--max-points", o.max_points, "Show at most this many of them (every n-th)")->capture_default_str();
     v->add_option("--colour,--color", o.colour, "Colouring when the page opens: height | level | confidence | normal | grey")->capture_default_str();
     v->add_option("--title", o.title, "Title of the page (default: the mesh's file name)");
+    o.tau = ReconstructionConfig{}.tau;
+    v->add_option("--tau", o.tau,
+                  "The tau the mesh was made with: colouring by confidence shows the vertices below it (inferred surface: bridges "
+                  "between scan rings) in magenta")
+        ->capture_default_str();
     return v;
 }
 
@@ -67,6 +75,7 @@ int run_view(const ViewOptions& o) {
     if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "normal" && o.colour != "grey")
         throw InvalidArgument("--colour must be height, level, confidence, normal or grey (got '" + o.colour + "')");
     if (o.max_points < 1) throw InvalidArgument("--max-points must be >= 1");
+    if (!std::isfinite(o.tau) || o.tau <= 0) throw InvalidArgument("--tau must be finite and > 0");
     const fs::path output = o.output.empty() ? fs::path(o.input).replace_extension(".html") : fs::path(o.output);
     const std::string ext = extension_of(output);
     if (ext != ".html" && ext != ".htm") throw InvalidArgument("view writes an HTML page: give -o a .html file (got '" + output.string() + "')");
@@ -109,6 +118,7 @@ int run_view(const ViewOptions& o) {
     data["triangles"] = base64(indices);
     data["levels"] = mesh.levels.size() == mesh.vertices.size() ? base64(mesh.levels) : "";
     data["confidence"] = mesh.confidence.size() == mesh.vertices.size() ? base64(mesh.confidence) : "";
+    data["tau"] = o.tau;
     data["points"] = base64(cloud);
     const std::string page = viewer_page(data);
     write_text(output.string(), page);

@@ -62,7 +62,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     c.min_planarity = in.unit() * 0.5;
     const std::uint8_t t = in.u8();
     c.truncation_voxels = (t & 3) == 0 ? 0.0 : 0.5 + t / 64.0;  // < sqrt(3)/2 must be refused
-    c.seeded_surface = in.u8() & 1;
+    const std::uint8_t surface = in.u8();
+    c.seeded_surface = surface & 1;
+    c.bridge_reach = (surface & 2) ? 30 : 0;  // bridges reach far: without them the reference paths run more often
     c.seed_dilation = in.u8() % 3;
     c.threads = 1 + in.u8() % 2;
     const std::uint8_t flags = in.u8();

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The page `lidarsurf view` writes, in a real browser: headless Chromium (Debian's chromium, WebGL
 # through SwiftShader) takes screenshots of a demo mesh coloured by height and by level; the mesh
-# must cover a good part of the picture, and switching the colouring must change it.
+# must cover a good part of the picture, and switching the colouring must change it. Then a VLP-16
+# frame of the town coloured by confidence: both the measured surface (the ramp) and the surface
+# bridged between its rings (magenta, confidence below tau) must show.
 # Usage: viewer_check.sh LIDARSURF_CLI [WORK_DIR]
 set -euo pipefail
 cli=$1
@@ -17,6 +19,13 @@ for colour in height level; do
     --window-size=900,600 --virtual-time-budget=10000 --screenshot="$work/$colour.png" "file://$work/mesh.html#colour=$colour" \
     >"$work/chromium-$colour.log" 2>&1 || { cat "$work/chromium-$colour.log"; exit 1; }
 done
+# A sparse lidar: its rings are bridged, at a confidence below tau.
+"$cli" simulate --scene town --sensor vlp16 --frames 1 -o "$work/vlp16.bin" >/dev/null
+"$cli" reconstruct "$work/vlp16.bin" -o "$work/vlp16.ply" >/dev/null
+"$cli" view "$work/vlp16.ply" -o "$work/vlp16.html" >/dev/null
+timeout 120 "$browser" --headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader --hide-scrollbars \
+  --window-size=900,600 --virtual-time-budget=10000 --screenshot="$work/confidence.png" "file://$work/vlp16.html#colour=confidence" \
+  >"$work/chromium-confidence.log" 2>&1 || { cat "$work/chromium-confidence.log"; exit 1; }
 /usr/bin/python3 - "$work" "$(dirname "$0")" <<'PY'
 import sys
 sys.path.insert(0, sys.argv[2])
@@ -30,4 +39,11 @@ changed = sum(1 for r1, r2 in zip(height, level) for p, q in zip(r1, r2) if max(
 print(f"viewer-check: the mesh covers {100 * covered / total:.1f} % of the picture; height -> level changes {100 * changed / total:.1f} %")
 assert covered > 0.10 * total, "the mesh is not visible"
 assert changed > 0.03 * total, "switching the colouring changed nothing"
+# Confidence: magenta (red and blue well above green; no colour of the ramp is) is inferred surface.
+conf = pixels(work + "/confidence.png")
+mesh = [p for row in conf for p in row if max(abs(p[i] - BACKGROUND[i]) for i in range(3)) > 12]
+magenta = sum(1 for p in mesh if p[0] > p[1] + 40 and p[2] > p[1] + 40)
+print(f"viewer-check: the VLP-16 mesh covers {100 * len(mesh) / total:.1f} %; magenta (inferred) {100 * magenta / max(1, len(mesh)):.1f} % of it")
+assert len(mesh) > 0.05 * total, "the VLP-16 mesh is not visible"
+assert 0.02 * len(mesh) < magenta < 0.9 * len(mesh), "the confidence colouring does not tell inferred from measured surface"
 PY

@@ -67,7 +67,7 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eig
 
 MeshDelta Reconstructor::update_mesh(double budget_ms) {
     if (!std::isfinite(budget_ms)) throw InvalidArgument("update_mesh: the budget must be finite (<= 0: no limit)");
-    if (!live_) live_.emplace(config_);
+    if (!live_) live_.emplace(surface_config(true));
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     return arena.execute([&] { return live_->update(grid_, sensor_, last_viewpoint_, budget_ms / 1e3); });
 }
@@ -128,8 +128,9 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + format_value(summary_.points_read) + " dropped)");
     const auto budget = static_cast<std::size_t>(budget_bytes());
+    const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
     summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) + (carver_ ? carver_->memory_bytes() : 0) +
-                               estimate_extraction_bytes(grid_, config_, evaluation, budget);
+                               estimate_extraction_bytes(grid_, config, evaluation, budget);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
                                         format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
@@ -140,7 +141,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     arena.execute([&] {
         auto t0 = std::chrono::steady_clock::now();
         if (config_.seeded_surface && evaluation == Evaluation::Fast) {
-            SeededTsdf seeded = compute_seeded_tsdf(grid_, config_, sensor_, EigenSolver::ClosedForm, previous_ ? &*previous_ : nullptr);
+            SeededTsdf seeded = compute_seeded_tsdf(grid_, config, sensor_, EigenSolver::ClosedForm, previous_ ? &*previous_ : nullptr);
             summary_.seconds_tsdf = seconds_since(t0);
             summary_.tsdf_phases = seeded.timing;
             summary_.candidate_vertices = seeded.evaluated;
@@ -151,10 +152,20 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
             // The next extraction redoes only what the points integrated from now on can reach.
             previous_ = std::move(seeded.field);
             grid_.clear_touched();
+        } else if (config.seeded_surface && config.bridges()) {
+            // Bridged vertices may lie beyond H^{k_max} of the data, outside compute_tsdf's candidates.
+            summary_.tsdf_phases = {};
+            const SeededTsdf seeded = reference_seeded_tsdf(grid_, config, sensor_);
+            summary_.candidate_vertices = seeded.evaluated;
+            summary_.reused_vertices = 0;
+            summary_.defined_vertices = seeded.field.size();
+            summary_.seconds_tsdf = seconds_since(t0);
+            t0 = std::chrono::steady_clock::now();
+            mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, placement);
         } else {
             summary_.tsdf_phases = {};
             TsdfStats stats;
-            const TsdfField field = compute_tsdf(grid_, config_, sensor_, &stats);
+            const TsdfField field = compute_tsdf(grid_, config, sensor_, &stats);
             summary_.candidate_vertices = stats.candidates;
             summary_.reused_vertices = 0;
             summary_.defined_vertices = stats.defined;
@@ -175,6 +186,12 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     summary_.mesh_vertices = mesh.vertices.size();
     summary_.mesh_triangles = mesh.triangles.size();
     return mesh;
+}
+
+ReconstructionConfig Reconstructor::surface_config(bool from_viewpoints) const {
+    ReconstructionConfig c = config_;
+    if (from_viewpoints) c.bridge_reach = 0;  // bridges are for the rings of one scan
+    return c;
 }
 
 double Reconstructor::budget_bytes() const { return config_.max_memory_mb * 1048576.0; }

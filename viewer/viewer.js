@@ -19,17 +19,24 @@
     return new Type(bytes.buffer);
   }
 
-  // ---- Colourings: height over the 2nd-98th percentile, k' over 1..k_max, confidence over [0, 1].
+  // ---- Colourings: height over the 2nd-98th percentile, k' over 1..k_max, confidence over
+  // [tau, 1] and, below tau (the mesh's Eq. (3) threshold), magenta: surface inferred between scan
+  // rings (bridges), not measured.
   function ramp(t, c) {
     t = Math.min(1, Math.max(0, t));
     return c.setHSL(0.66 * (1 - t), 0.75, 0.5);
   }
-  const grey = new THREE.Color(0.7, 0.7, 0.7), none = new THREE.Color(0.6, 0.6, 0.6);
+  const grey = new THREE.Color(0.7, 0.7, 0.7), none = new THREE.Color(0.6, 0.6, 0.6), inferred = new THREE.Color(0.85, 0.25, 0.85);
+  const tau = typeof data.tau === "number" && data.tau > 0 ? data.tau : 0.2;
   const range = { zlo: 0, zhi: 1, kmax: 1 };
   const modes = {
     height: (p, i, c) => ramp((p.positions[3 * i + 2] - range.zlo) / (range.zhi - range.zlo), c),
     level: (p, i, c) => (p.levels.length ? ramp((p.levels[i] - 1) / Math.max(1, range.kmax - 1), c) : c.copy(none)),
-    confidence: (p, i, c) => (p.confidence.length ? ramp(p.confidence[i], c) : c.copy(none)),
+    confidence: (p, i, c) => {
+      if (!p.confidence.length) return c.copy(none);
+      const v = p.confidence[i];
+      return v < tau ? c.copy(inferred) : ramp((v - tau) / Math.max(1 - tau, tau), c);
+    },
     normal: (p, i, c) => {
       const n = p.geometry.attributes.normal.array;
       return c.setRGB(0.5 + 0.5 * n[3 * i], 0.5 + 0.5 * n[3 * i + 1], 0.5 + 0.5 * n[3 * i + 2]);

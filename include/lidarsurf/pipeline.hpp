@@ -97,6 +97,9 @@ private:
     double budget_bytes() const;
     std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;
 
+    /// The configuration the surface is extracted with: config_, without bridges on a grid
+    /// fused from viewpoints (a map's scans fill in each other's rings).
+    ReconstructionConfig surface_config(bool from_viewpoints) const;
     ReconstructionConfig config_;
     Eigen::Vector3d sensor_;
     VoxelGrid grid_;

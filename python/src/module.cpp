@@ -204,6 +204,12 @@ PYBIND11_MODULE(_lidarsurf, m) {
         .def_readwrite("slab_radial_extension", &ReconstructionConfig::slab_radial_extension,
                        "Radial slabs: the slabs reach this many voxels further on each side along the horizontal axis on "
                        "which the vertex is further from the sensor, across the scan rings (0 = square slabs).")
+        .def_readwrite("bridge_reach", &ReconstructionConfig::bridge_reach,
+                       "Bridges (single scans, AN+GC): a vertex no level defines is defined by the plane of the scan rings "
+                       "on both sides of it, within k_max + bridge_reach voxels along the beam, when they agree; its "
+                       "confidence stays below tau, marking inferred surface (0 = off, as the paper).")
+        .def_readwrite("bridge_range", &ReconstructionConfig::bridge_range,
+                       "Bridges are tried only within this horizontal distance (metres) of the sensor.")
         .def_readwrite("snap_to_plane", &ReconstructionConfig::snap_to_plane,
                        "Move each mesh vertex onto the plane of the nearer lattice vertex of its edge (False: interpolate).")
         .def_readwrite("min_component_triangles", &ReconstructionConfig::min_component_triangles,
@@ -241,7 +247,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
             o << "Config(voxel_size=" << c.voxel_size << ", tau=" << c.tau << ", n_min=" << c.n_min << ", k_max=" << c.k_max
               << ", k=" << c.k << ", mode='" << to_string(c.mode) << "', min_planarity=" << c.min_planarity
               << ", max_thickness=" << c.max_thickness << ", slab_from_level=" << c.slab_from_level
-              << ", slab_radial_extension=" << c.slab_radial_extension
+              << ", slab_radial_extension=" << c.slab_radial_extension << ", bridge_reach=" << c.bridge_reach << ", bridge_range=" << c.bridge_range
               << ", truncation_voxels=" << c.truncation_voxels
               << ", snap_to_plane=" << (c.snap_to_plane ? "True" : "False") << ", min_component_triangles=" << c.min_component_triangles
               << ", seeded_surface=" << (c.seeded_surface ? "True" : "False")

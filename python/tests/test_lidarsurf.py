@@ -32,6 +32,7 @@ def test_paper_config_turns_the_guards_off(scan):
     d = lidarsurf.Config()
     assert d.max_thickness > 0 and d.snap_to_plane and d.truncation_voxels > 0
     assert d.slab_from_level > 0 and d.slab_radial_extension > 0 and "slab_radial_extension=" in repr(d)
+    assert d.bridge_reach > 0 and "bridge_reach=" in repr(d) and lidarsurf.Config.paper().bridge_reach == 0
     d.make_paper_literal()
     assert d.max_thickness == 0 and not d.snap_to_plane and d.slab_from_level == 0
     assert "max_thickness=0" in repr(d) and "slab_from_level=0" in repr(d)
@@ -52,6 +53,7 @@ def test_paper_config_turns_the_guards_off(scan):
     ("min_component_triangles", -1, "min component"),
     ("slab_from_level", 1, "slab fallback"),
     ("slab_radial_extension", -1, "slab radial extension"),
+    ("bridge_reach", 65, "bridge reach"),
 ])
 def test_bad_config_raises_value_error(field, value, message, scan):
     c = lidarsurf.Config()

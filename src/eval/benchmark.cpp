@@ -70,7 +70,10 @@ std::vector<BenchmarkMethod> ablation_methods(const ReconstructionConfig& base) 
     c.slab_radial_extension = 0;
     rows.push_back(method_row("+slab", c));
     c.slab_radial_extension = base.slab_radial_extension;
-    rows.push_back(method_row("+radial slabs (default)", c));
+    rows.push_back(method_row("+radial slabs", c));
+    c.bridge_reach = base.bridge_reach;
+    c.bridge_range = base.bridge_range;
+    rows.push_back(method_row("+bridges (default)", c));
     for (int k : {3, 7}) {
         ReconstructionConfig ck = base;
         ck.k_max = k;

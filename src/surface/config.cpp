@@ -41,6 +41,7 @@ void ReconstructionConfig::make_paper_literal() {
     min_planarity = 0;
     max_thickness = 0;
     slab_from_level = 0;
+    bridge_reach = 0;
     truncation_voxels = 0;
     seeded_surface = false;
     snap_to_plane = false;
@@ -50,8 +51,11 @@ void ReconstructionConfig::make_paper_literal() {
 
 int ReconstructionConfig::max_level() const { return adaptive() ? k_max : k; }
 
+int ReconstructionConfig::bridge_extent() const { return std::max(0, std::min(bridge_reach, kMaxReach - k_max)); }
+
 int ReconstructionConfig::max_reach() const {
-    return max_level() + (adaptive() && slab_from_level > 0 ? slab_radial_extension : 0);
+    const int reach = max_level() + (adaptive() && slab_from_level > 0 ? slab_radial_extension : 0);
+    return bridges() ? std::max(reach, k_max + bridge_extent()) : reach;
 }
 
 void ReconstructionConfig::validate() const {
@@ -72,6 +76,10 @@ void ReconstructionConfig::validate() const {
     if (slab_radial_extension < 0 || slab_radial_extension > kMaxNeighbourhoodLevel)
         fail("slab radial extension must be in [0, " + format_value(kMaxNeighbourhoodLevel) + "] voxels (got " +
              format_value(slab_radial_extension) + ")");
+    if (bridge_reach < 0 || bridge_reach > kMaxReach)
+        fail("bridge reach must be in [0, " + format_value(kMaxReach) + "] voxels (got " + format_value(bridge_reach) + ")");
+    if (!std::isfinite(bridge_range) || bridge_range < 0 || bridge_range > 1e4)
+        fail("bridge range must be within [0, 1e4] m (got " + format_value(bridge_range) + ")");
     if (min_component_triangles < 0) fail("min component triangles must be >= 0 (got " + format_value(min_component_triangles) + ")");
     if (!std::isfinite(truncation_voxels) || truncation_voxels < 0)
         fail("truncation must be finite and >= 0 voxels (0 disables it; got " + format_value(truncation_voxels) + ")");

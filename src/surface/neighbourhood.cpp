@@ -29,6 +29,25 @@ VoxelBox slab_box(const VoxelKey& v, int k, SlabExtension e) {
     return {{v.x() - k - e.x, v.y() - k - e.y, v.z() - 1}, {v.x() + k - 1 + e.x, v.y() + k - 1 + e.y, v.z()}};
 }
 
+std::array<VoxelBox, 2> bridge_boxes(const VoxelKey& v, int k, int reach, const Eigen::Vector3d& position, const Eigen::Vector3d& sensor) {
+    if (k < 1 || reach < 0) throw InvalidArgument("bridge boxes need k >= 1 and reach >= 0");
+    const Eigen::Vector3d r = position - sensor;
+    const int axis = std::abs(r.x()) >= std::abs(r.y()) ? 0 : 1, across = 1 - axis;
+    VoxelBox lower{v, v}, upper{v, v};
+    for (VoxelBox* b : {&lower, &upper}) {
+        b->lo[across] = v[across] - k;
+        b->hi[across] = v[across] + k - 1;
+        b->lo.z() = v.z() - 2;
+        b->hi.z() = v.z() + 1;
+    }
+    lower.lo[axis] = v[axis] - k - reach;
+    lower.hi[axis] = v[axis] - 1;
+    upper.lo[axis] = v[axis];
+    upper.hi[axis] = v[axis] + k - 1 + reach;
+    if (r[axis] >= 0) return {lower, upper};  // the sensor is on the lower side
+    return {upper, lower};
+}
+
 std::array<VoxelBox, 6> shell_boxes(const VoxelKey& v, int k) {
     const VoxelKey lo = v.array() - k, hi = v.array() + (k - 1);
     const int ilo = -k + 1, ihi = k - 2;  // inner range offsets [v-k+1, v+k-2]

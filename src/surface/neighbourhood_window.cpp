@@ -637,6 +637,12 @@ Moments NeighbourhoodWindow::slab(const VoxelKey& v, int k, SlabExtension e) con
     return acc;
 }
 
+Moments NeighbourhoodWindow::sum_box(const VoxelBox& b, const VoxelKey& v) const {
+    Moments acc;
+    add_slab(b.lo, b.hi, false, v.cast<double>() * alpha_, acc);
+    return acc;
+}
+
 void NeighbourhoodWindow::grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e) const {
     // S^k \ S^{k-1}: the x-y ring of width one around S^{k-1}'s x-y range, on both layers.
     const VoxelBox b = slab_box(v, k, e);

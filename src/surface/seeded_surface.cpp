@@ -17,6 +17,7 @@
 #if defined(__SSE2__) && !defined(LIDARSURF_SCALAR)
 #include <emmintrin.h>
 #endif
+#include <tbb/concurrent_unordered_map.h>
 #include <tbb/concurrent_vector.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -264,6 +265,47 @@ std::vector<VoxelKey> seeded_cubes(const TsdfField& field, const VoxelGrid& grid
     std::vector<VoxelKey> cubes = search.run(true, 1024, [&] { return FieldView{TsdfField::Accessor(field)}; }, [](const std::vector<VoxelKey>&) {});
     sort_zyx(cubes);
     return cubes;
+}
+
+SeededTsdf reference_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world) {
+    config.validate();
+    const Eigen::Vector3d sensor_local = grid.to_local(sensor_world);
+    const Truncation truncation = truncation_of(config, grid);
+    tbb::concurrent_unordered_map<VoxelKey, VertexSample, VoxelKeyHash> evaluated;
+    CubeSearch search(grid);
+    search.seed(grid, config.seed_dilation);
+    // Each corner evaluated when a visited cube first needs it (the reference evaluation).
+    struct LazyView {
+        const VoxelGrid* grid;
+        const ReconstructionConfig* config;
+        const Eigen::Vector3d* sensor;
+        const Truncation* truncation;
+        tbb::concurrent_unordered_map<VoxelKey, VertexSample, VoxelKeyHash>* evaluated;
+        bool corners(const VoxelKey& cube, CornerValues& s) {
+            for (std::size_t c = 0; c < 8; ++c) {
+                const VoxelKey v = cube + corner_offset(static_cast<int>(c));
+                auto it = evaluated->find(v);
+                if (it == evaluated->end()) it = evaluated->insert({v, evaluate_vertex(*grid, v, *config, *sensor)}).first;
+                if (!truncation->keeps(it->second)) return false;
+                s[c] = it->second.tsdf;
+            }
+            return true;
+        }
+    };
+    SeededTsdf out;
+    out.cubes = search.run(true, 256, [&] { return LazyView{&grid, &config, &sensor_local, &truncation, &evaluated}; },
+                           [](const std::vector<VoxelKey>&) {});
+    sort_zyx(out.cubes);
+    std::vector<VoxelKey> keys;
+    keys.reserve(evaluated.size());
+    for (const auto& [key, sample] : evaluated) keys.push_back(key);
+    sort_zyx(keys);
+    std::vector<VertexSample> samples;
+    samples.reserve(keys.size());
+    for (const VoxelKey& key : keys) samples.push_back(evaluated.find(key)->second);
+    out.evaluated = keys.size();
+    out.field = assemble_field(grid, keys, samples, truncation);
+    return out;
 }
 
 namespace {

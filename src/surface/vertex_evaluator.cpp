@@ -61,25 +61,29 @@ VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vec
     if (!config.adaptive())  // CN, CN+GC: only H^k.
         return evaluate_level(stats_of(config.k), config.k, position, config, sensor_local, min_lambda2, solver);
     // AN, AN+GC: the smallest k in [1, k_max] that satisfies the conditions.
-    int slab_start = 0;  // the level at which v switched to slabs (0: not yet)
-    SlabExtension extension;  // the slabs' radial extension, set at the switch
-    for (int level = first_level; level <= config.k_max; ++level) {
-        if (slab_start == 0) {
-            const VoxelStats& cube = stats_of(level);
-            const VertexSample s = evaluate_level(cube, level, position, config, sensor_local, min_lambda2, solver);
-            if (s.defined) return s;
-            // Slab fallback (docs/method.md): from level 2 on, H^k has the points but no plane,
-            // typically because it reaches an object beside the ground; a larger cube reaches more
-            // of the object, so v tries only slabs from here (from slab_from_level: narrower slabs
-            // rarely hold two scan rings), unless no slab level is left to try.
-            const int first_slab = std::max(level, config.slab_from_level);
-            if (config.slab_from_level == 0 || level < 2 || cube.count < static_cast<std::uint64_t>(config.n_min) || first_slab > config.k_max)
-                continue;
-            slab_start = first_slab;
-            extension = radial_extension(position, sensor_local, config.slab_radial_extension);
-        }
-        if (level < slab_start) continue;
+    int switched = 0;  // the level whose cube switched v to slabs (0: not yet)
+    for (int level = first_level; level <= config.k_max && switched == 0; ++level) {
+        const VoxelStats& cube = stats_of(level);
+        const VertexSample s = evaluate_level(cube, level, position, config, sensor_local, min_lambda2, solver);
+        if (s.defined) return s;
+        // Slab fallback (docs/method.md): from level 2 on, H^k has the points but no plane,
+        // typically because it reaches an object beside the ground (a larger cube reaches more
+        // of it), or because it holds one scan ring of a wall. v then tries the slabs (from
+        // slab_from_level: narrower slabs rarely hold two scan rings) up to k_max, and only
+        // then the larger cubes (the next ring of a wall).
+        if (config.slab_from_level != 0 && level >= 2 && cube.count >= static_cast<std::uint64_t>(config.n_min) &&
+            std::max(level, config.slab_from_level) <= config.k_max)
+            switched = level;
+    }
+    if (switched == 0) return {};
+    const int slab_start = std::max(switched, config.slab_from_level);
+    const SlabExtension extension = radial_extension(position, sensor_local, config.slab_radial_extension);
+    for (int level = slab_start; level <= config.k_max; ++level) {
         const VertexSample s = evaluate_level(slab_of(level, level == slab_start, extension), level, position, config, sensor_local, min_lambda2, solver);
+        if (s.defined) return s;
+    }
+    for (int level = switched + 1; level <= config.k_max; ++level) {
+        const VertexSample s = evaluate_level(stats_of(level), level, position, config, sensor_local, min_lambda2, solver);
         if (s.defined) return s;
     }
     return {};
@@ -99,6 +103,33 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
     const double confidence = gaussian_confidence(*plane, position);  // Eq. (3)
     if (config.gaussian() && confidence < config.tau) return {};
     return make_sample(*plane, position, level, confidence);
+}
+
+bool within_bridge_range(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const ReconstructionConfig& config) {
+    return (position - sensor_local).head<2>().squaredNorm() <= config.bridge_range * config.bridge_range;
+}
+
+VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
+    // A ring on each side: half of Eq. (1) on either side of v.
+    const auto half = static_cast<std::uint64_t>((config.n_min + 1) / 2);
+    if (near.count < half || far.count < half) return {};
+    VoxelStats both = near;
+    both.merge(far);
+    // No planarity guard here: two rings far apart are a long, narrow plane (lambda2 / lambda1
+    // below the guard); one line is told apart by the spread across the boxes instead.
+    const auto plane = fit_plane(both, config.n_min, sensor_local, min_lambda2, 0.0, solver);  // Eq. (2)
+    if (!plane) return {};
+    const double width = config.k_max * config.voxel_size;  // the boxes are 2 k_max voxels wide
+    if (plane->lambda2 < config.min_planarity * plane->lambda1 && plane->lambda2 < width * width / 12) return {};  // one line
+    const double thickness = config.max_thickness > 0 ? config.max_thickness * config.voxel_size : config.voxel_size;
+    if (plane->lambda3 > thickness * thickness) return {};  // not one surface
+    // Both sides on the plane (the rings agree), and the plane ground-like (z up).
+    if (std::abs(signed_distance(*plane, near.mean)) > thickness || std::abs(signed_distance(*plane, far.mean)) > thickness) return {};
+    if (std::abs(plane->normal.z()) < kBridgeMinNormalZ) return {};
+    // Eq. (3) is not required; the confidence stays below tau: inferred surface.
+    const double confidence = std::min(gaussian_confidence(*plane, position), std::nextafter(config.tau, 0.0));
+    return make_sample(*plane, position, config.k_max, confidence);
 }
 
 Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
@@ -123,8 +154,12 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
         slab = merge_box(grid, slab_box(v, level, e));
         return slab;
     };
-    return choose_level(stats_of, slab_of, v.cast<double>() * grid.voxel_size(), config, sensor_local,
-                        degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
+    const Eigen::Vector3d position = v.cast<double>() * grid.voxel_size();
+    const VertexSample s = choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
+    if (s.defined || !config.bridges() || grid.has_viewpoints() || !within_bridge_range(position, sensor_local, config)) return s;
+    const auto boxes = bridge_boxes(v, config.k_max, config.bridge_extent(), position, sensor_local);
+    return evaluate_bridge(merge_box(grid, boxes[0]), merge_box(grid, boxes[1]), position, config, sensor_local,
+                           degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
 }
 
 namespace {
@@ -159,7 +194,11 @@ VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey
             window.grow_slab(v, level, slab, e);
         return stats(slab);
     };
-    return choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver, counted);
+    const VertexSample s = choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver, counted);
+    if (s.defined || !config.bridges() || window.grid().has_viewpoints() || !within_bridge_range(position, sensor_local, config)) return s;
+    const auto boxes = bridge_boxes(v, config.k_max, config.bridge_extent(), position, sensor_local);
+    return evaluate_bridge(window.sum_box(boxes[0], v).to_stats(position), window.sum_box(boxes[1], v).to_stats(position), position, config,
+                           sensor_local, degenerate_lambda2(window.voxel_size()), solver);
 }
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(LIDARSURF_SCALAR)

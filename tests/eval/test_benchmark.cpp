@@ -44,7 +44,7 @@ TEST(Benchmark, TableOneRows) {
 TEST(Benchmark, AblationAddsOneGuardPerRow) {
     const ReconstructionConfig def;
     const auto rows = ablation_methods(def);
-    ASSERT_GE(rows.size(), 8u);
+    ASSERT_GE(rows.size(), 9u);
     const ReconstructionConfig paper = ReconstructionConfig::paper();
     EXPECT_EQ(rows[0].config.min_planarity, paper.min_planarity);
     EXPECT_EQ(rows[0].config.seeded_surface, paper.seeded_surface);
@@ -58,8 +58,12 @@ TEST(Benchmark, AblationAddsOneGuardPerRow) {
     EXPECT_EQ(rows[5].config.slab_from_level, 0);
     EXPECT_EQ(rows[6].config.slab_from_level, def.slab_from_level);
     EXPECT_EQ(rows[6].config.slab_radial_extension, 0);
+    EXPECT_EQ(rows[7].config.slab_radial_extension, def.slab_radial_extension);
+    EXPECT_EQ(rows[7].config.bridge_reach, 0);
     // The last step of the ablation is the default itself.
-    const ReconstructionConfig& last = rows[7].config;
+    const ReconstructionConfig& last = rows[8].config;
+    EXPECT_EQ(last.bridge_reach, def.bridge_reach);
+    EXPECT_EQ(last.bridge_range, def.bridge_range);
     EXPECT_EQ(last.slab_radial_extension, def.slab_radial_extension);
     EXPECT_TRUE(last.snap_to_plane);
     EXPECT_EQ(last.slab_from_level, def.slab_from_level);

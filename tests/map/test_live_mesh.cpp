@@ -57,7 +57,9 @@ std::vector<Triangle> triangles_of(const std::map<KeyTuple, Mesh>& client) {
 TEST(LiveMesh, WithoutThresholdOrBudgetItIsTheExactMesh) {
     ReconstructionConfig c;
     c.live_growth = 0;  // every change re-meshes
-    c.live_reach_blocks = (c.max_reach() + 7) / 8;  // everything a vertex depends on
+    ReconstructionConfig map = c;
+    map.bridge_reach = 0;  // a map has no bridges (Reconstructor::surface_config)
+    c.live_reach_blocks = (map.max_reach() + 7) / 8;  // everything a vertex depends on
     c.live_halo_cubes = 16;
     c.live_range = 1e3;
     const std::vector<Scan>& drive = town_drive();

@@ -203,6 +203,7 @@ TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {
     const Eigen::Vector3d position(0.6, 0.0, 0.2);
     ReconstructionConfig c;
     c.slab_radial_extension = 3;
+    c.bridge_reach = 0;  // the slabs alone
     const PackedVoxels packed(g);
     const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), c.max_reach());
     ASSERT_EQ(c.max_reach(), c.k_max + 3);
@@ -224,6 +225,68 @@ TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {
     }
 }
 
+// Bridges on a crafted ground (alpha = 0.2, local origin 0, sensor at (-10, 0.1, 1.7)): two scan
+// rings, lines along y on the plane z = 0.05 + 0.1 x (a 5.7 degree slope) at x = 0.05 and 5.05,
+// 5 m apart as the rings of a VLP-16 some 15 m out. Vertex v = (13, 0, 2), at (2.6, 0, 0.4), lies
+// midway, 2.5 m from either ring: beyond every cube and slab (H^5 and the radial slabs reach
+// 2.6 m but never both rings), so no level defines it. Its bridge boxes (x in [-1.6, 2.6) and
+// [2.6, 8.6), y in [-1, 1), z in [0, 0.8)) hold one ring each: defined by their plane, with the
+// exact signed distance (0.4 - 0.31) cos(5.7 deg) and a confidence below tau.
+TEST(VertexEvaluator, BridgesJoinTwoRingsThatAgree) {
+    const Eigen::Vector3d sensor(-10.0, 0.1, 1.7);
+    auto ground_z = [](double x) { return 0.05 + 0.1 * x; };
+    auto street = [&](bool second_ring_raised, bool one_line) {
+        VoxelGrid g(0.2, Eigen::Vector3d::Zero());
+        for (int i = 0; i <= 200; ++i) {
+            const double y = -2.0 + 0.02 * i;
+            if (one_line) {  // one ring crossing both boxes instead: a line along x
+                g.insert({-1.5 + 0.05 * i, 0.3, ground_z(-1.5 + 0.05 * i)});
+                continue;
+            }
+            g.insert({0.05, y, ground_z(0.05)});
+            g.insert({5.05, y, ground_z(5.05) + (second_ring_raised ? 0.3 : 0.0)});
+        }
+        return g;
+    };
+    const VoxelKey v(13, 0, 2);
+    const Eigen::Vector3d position = v.cast<double>() * 0.2;
+    const Eigen::Vector3d n = Eigen::Vector3d(-0.1, 0, 1).normalized();
+    const double truth = n.dot(position - Eigen::Vector3d(0, 0, ground_z(0)));
+    ReconstructionConfig c;
+    auto both_paths = [&](const VoxelGrid& g, const ReconstructionConfig& config) {
+        const PackedVoxels packed(g);
+        const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), config.max_reach());
+        return std::array<VertexSample, 3>{evaluate_vertex(g, v, config, sensor), evaluate_vertex(window, v, config, sensor, EigenSolver::Iterative),
+                                           evaluate_vertex(window, v, config, sensor, EigenSolver::ClosedForm)};
+    };
+    for (const VertexSample& s : both_paths(street(false, false), c)) {
+        ASSERT_TRUE(s.defined);
+        EXPECT_NEAR(s.tsdf, truth, 1e-6);
+        EXPECT_NEAR(s.normal.z(), n.z(), 1e-6);
+        EXPECT_LT(s.confidence, c.tau) << "a bridge is inferred surface";
+        EXPECT_GT(s.confidence, 0.0f);
+    }
+    // Without bridges, or in AN (no Eq. (3) to mark the inferred surface), nothing defines v.
+    ReconstructionConfig off = c;
+    off.bridge_reach = 0;
+    for (const VertexSample& s : both_paths(street(false, false), off)) EXPECT_FALSE(s.defined);
+    off = c;
+    off.mode = Mode::Adaptive;
+    for (const VertexSample& s : both_paths(street(false, false), off)) EXPECT_FALSE(s.defined);
+    // Too short a reach: the far ring is not in the far box.
+    off = c;
+    off.bridge_reach = 6;  // x up to 2.6 + (5 + 6) 0.2 = 4.8 m
+    for (const VertexSample& s : both_paths(street(false, false), off)) EXPECT_FALSE(s.defined);
+    // Rings that disagree (the far one 0.3 m above the slope: a curb, an object's foot) are not
+    // one surface; one ring crossing both boxes is a line.
+    for (const VertexSample& s : both_paths(street(true, false), c)) EXPECT_FALSE(s.defined);
+    for (const VertexSample& s : both_paths(street(false, true), c)) EXPECT_FALSE(s.defined);
+    // A grid fused from viewpoints (a map) has no bridges.
+    VoxelGrid fused = street(false, false);
+    fused.enable_viewpoints(sensor);
+    EXPECT_FALSE(evaluate_vertex(fused, v, c, sensor).defined);
+}
+
 TEST(Config, PaperTurnsEveryGuardOff) {
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
         const ReconstructionConfig p = ReconstructionConfig::paper(mode);
@@ -232,6 +295,7 @@ TEST(Config, PaperTurnsEveryGuardOff) {
         EXPECT_EQ(p.min_planarity, 0);
         EXPECT_EQ(p.max_thickness, 0);
         EXPECT_EQ(p.slab_from_level, 0);
+        EXPECT_EQ(p.bridge_reach, 0);
         EXPECT_EQ(p.truncation_voxels, 0);
         EXPECT_FALSE(p.seeded_surface);
         EXPECT_FALSE(p.snap_to_plane);
@@ -275,8 +339,21 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
     EXPECT_THROW(bad([](auto& c) { c.slab_radial_extension = -1; }).validate(), InvalidArgument);
     EXPECT_THROW(bad([](auto& c) { c.slab_radial_extension = 33; }).validate(), InvalidArgument);
     EXPECT_NO_THROW(bad([](auto& c) { c.slab_radial_extension = 0; }).validate());
-    // The neighbourhoods' reach: the slabs' extension counts only where slabs are tried.
+    EXPECT_THROW(bad([](auto& c) { c.bridge_reach = -1; }).validate(), InvalidArgument);
+    EXPECT_THROW(bad([](auto& c) { c.bridge_reach = 65; }).validate(), InvalidArgument);
+    EXPECT_NO_THROW(bad([](auto& c) { c.bridge_reach = 0; }).validate());
+    // The neighbourhoods' reach: the bridges' in AN+GC, the slabs' extension only where slabs are
+    // tried; k_max + the bridges' reach is capped at the windows' 64 voxels.
     ReconstructionConfig r;
+    EXPECT_EQ(r.max_reach(), r.k_max + r.bridge_reach);
+    r.bridge_reach = 64;
+    EXPECT_EQ(r.bridge_extent(), 64 - r.k_max);
+    EXPECT_EQ(r.max_reach(), 64);
+    r.mode = Mode::Adaptive;  // bridges are AN+GC's (their confidence is below tau)
+    EXPECT_FALSE(r.bridges());
+    EXPECT_EQ(r.max_reach(), r.k_max + r.slab_radial_extension);
+    r.mode = Mode::AdaptiveGaussian;
+    r.bridge_reach = 0;
     EXPECT_EQ(r.max_reach(), r.k_max + r.slab_radial_extension);
     r.slab_from_level = 0;
     EXPECT_EQ(r.max_reach(), r.k_max);

@@ -37,6 +37,10 @@ expect 2 "\.html" -- "$cli" view "$dir/mesh.ply" -o "$dir/mesh.png"
 expect 2 "colour" -- "$cli" view "$dir/mesh.ply" --colour rainbow
 expect 0 "triangles" -- "$cli" view "$dir/mesh.ply" -o "$dir/normal.html" --colour normal   # every colouring the page has
 grep -q '"colour":"normal"' "$dir/normal.html" || { echo "FAIL: --colour normal not in the page"; fail=$((fail + 1)); }
+# The mesh's tau reaches the page (its confidence colouring marks the vertices below it); 0 is refused.
+expect 0 "triangles" -- "$cli" view "$dir/mesh.ply" -o "$dir/tau.html" --colour confidence --tau 0.3
+grep -q '"tau":0.3' "$dir/tau.html" || { echo "FAIL: --tau not in the page"; fail=$((fail + 1)); }
+expect 2 "tau" -- "$cli" view "$dir/mesh.ply" -o "$dir/tau0.html" --tau 0
 ln -s "$dir/mesh.ply" "$dir/alias.html"
 expect 2 "is the input" -- "$cli" view "$dir/mesh.ply" -o "$dir/alias.html"
 printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n' > "$dir/points.ply"

@@ -28,6 +28,10 @@ inline double truncation_distance_of(double truncation_voxels, double voxel_size
     return truncation_voxels > 0 ? truncation_voxels * voxel_size : std::numeric_limits<double>::infinity();
 }
 
+/// Upper bound on ReconstructionConfig::max_reach(): a NeighbourhoodWindow covers 64 voxels
+/// around its vertex block.
+inline constexpr int kMaxReach = 64;
+
 struct ReconstructionConfig {
     double voxel_size = 0.2;   ///< alpha, metres (Sec. III-A).
     double tau = 0.2;          ///< Gaussian confidence threshold of Eq. (3).
@@ -54,6 +58,20 @@ struct ReconstructionConfig {
     /// spacing on the ground grows with the square of the range), so it can hold two rings where
     /// a square one holds one (docs/method.md, "Radial slabs"). In [0, 32]; 0 = square slabs.
     int slab_radial_extension = 8;
+    /// Bridging between scan rings (docs/method.md, "Bridges"), AN+GC on a single scan only: a
+    /// vertex that no level defines tries the bridge boxes, 2 k_max voxels wide across the beam,
+    /// four voxel layers high (v_z - 2 .. v_z + 1) and reaching k_max + bridge_reach voxels toward
+    /// and away from the sensor along the horizontal axis nearer the beam (as the radial slabs).
+    /// It is defined by the plane of their points when both boxes hold N_min / 2 points (a ring on
+    /// each side), the two sides lie on that plane within the thickness guard, the plane is
+    /// within 45 degrees of horizontal (z up) and its points are not one line; Eq. (3) is not
+    /// required, and the vertex's confidence is kept below tau, so a confidence below tau marks
+    /// inferred surface (the PLY's confidence). In [0, 64] (k_max + bridge_reach is capped at
+    /// 64, bridge_extent()); 0 disables.
+    int bridge_reach = 30;
+    /// Bridges are tried only within this horizontal distance (metres) of the sensor: beyond it
+    /// the rings are metres apart on every sensor, and bridging them costs time for guessed ground.
+    double bridge_range = 30.0;
     /// Moves each marching-cubes vertex onto the plane Pi^{k'} of the nearer corner of its edge
     /// (docs/method.md, "Snapping").
     bool snap_to_plane = true;
@@ -114,9 +132,14 @@ struct ReconstructionConfig {
     /// Largest level this configuration evaluates (k_max or k).
     int max_level() const;
     /// How far (in voxels, per axis) from a vertex its neighbourhoods reach: max_level(), plus
-    /// the slabs' radial extension when the slab fallback is on.
+    /// the slabs' radial extension when the slab fallback is on, or k_max + bridge_reach when
+    /// bridging is on, whichever is larger.
     int max_reach() const;
     bool adaptive() const { return mode == Mode::AdaptiveGaussian || mode == Mode::Adaptive; }
+    /// Whether vertices no level defines try the bridge boxes (AN+GC with bridge_reach > 0).
+    bool bridges() const { return mode == Mode::AdaptiveGaussian && bridge_reach > 0; }
+    /// The bridge boxes' reach beyond k_max: bridge_reach, capped so that k_max + it <= kMaxReach.
+    int bridge_extent() const;
     bool gaussian() const { return mode == Mode::AdaptiveGaussian || mode == Mode::ConstantGaussian; }
 
     /// Throws InvalidArgument naming the first bad field.

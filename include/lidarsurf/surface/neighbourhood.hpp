@@ -31,6 +31,12 @@ SlabExtension radial_extension(const Eigen::Vector3d& position, const Eigen::Vec
 /// the two voxel layers beside v along z and extended by e (the slab fallback, docs/method.md).
 VoxelBox slab_box(const VoxelKey& vertex, int k, SlabExtension e = {});
 
+/// The bridge boxes of vertex v at `position` seen from `sensor` (docs/method.md, "Bridges"):
+/// along the horizontal axis on which v is further from the sensor (x on a tie; the radial
+/// slabs' axis), [v - k - reach, v - 1] and [v, v + k - 1 + reach]; across it [v - k, v + k - 1];
+/// along z [v_z - 2, v_z + 1]. The first is the one on the sensor's side.
+std::array<VoxelBox, 2> bridge_boxes(const VoxelKey& vertex, int k, int reach, const Eigen::Vector3d& position, const Eigen::Vector3d& sensor);
+
 /// Merged statistics of the voxels of `box`.
 VoxelStats merge_box(const VoxelGrid& grid, const VoxelBox& box);
 

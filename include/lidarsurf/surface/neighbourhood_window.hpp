@@ -135,6 +135,9 @@ public:
     Moments slab(const VoxelKey& v, int k, SlabExtension e = {}) const;
     /// Adds S^k(v) \ S^{k-1}(v) (both extended by e) to `acc` (which holds S^{k-1}(v); k >= 2).
     void grow_slab(const VoxelKey& v, int k, Moments& acc, SlabExtension e = {}) const;
+    /// Moments of any box within the window's reach (the bridge boxes) about v's position, by
+    /// the slab walk.
+    Moments sum_box(const VoxelBox& b, const VoxelKey& v) const;
 
     double voxel_size() const { return alpha_; }
     /// The SimdLevel of the window's kernels (simd_level() at construction or the last reset()).

@@ -55,6 +55,13 @@ struct SeededTsdf {
     SeededTiming timing;
 };
 
+/// The reference of the same search without candidate vertices: every corner of a visited cube
+/// is evaluated with the reference evaluate_vertex when the search first needs it (serially
+/// memoised, Chan merges, iterative eigen solver). For configurations whose vertices can be
+/// defined beyond H^{k_max} of the data (bridges), where compute_tsdf's candidates would miss
+/// them; the same cubes and values as the fast path.
+SeededTsdf reference_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world);
+
 /// A part of the lattice the surface search is kept to: per 8^3 block of cubes, the mask of
 /// the cubes in it (cube i = the cube with minimum corner i, BlockMask layout). What a live mesh
 /// re-meshes of a large map: some blocks, and a margin of cubes around them so that the surface

@@ -68,6 +68,21 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
                             const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
                             EigenSolver solver);
 
+/// A bridge's plane must be within 45 degrees of horizontal: |n_z| >= cos 45 degrees.
+inline constexpr double kBridgeMinNormalZ = 0.70710678118654752;
+
+/// Whether `position` lies within config.bridge_range (horizontally) of the sensor.
+bool within_bridge_range(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const ReconstructionConfig& config);
+
+/// The bridge of a vertex no level defines (docs/method.md, "Bridges"; AN+GC on a single scan):
+/// `near` and `far` are the merged statistics of its two bridge_boxes (the sensor's side first).
+/// Defined, with the TSDF to the plane of both and a confidence below tau, when each holds
+/// ceil(N_min / 2) points, their points are not one line, are no thicker than the thickness
+/// guard, both means lie on the plane within it, and the plane is within 45 degrees of
+/// horizontal. Shared by both evaluations above.
+VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+                             const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver);
+
 /// Whether the invariants of the covariance alone prove that evaluate_level rejects a level, so
 /// that the fast path can skip the eigen solve (about 28 % of the solves on a lidar frame):
 ///  - planarity: with T = tr C = l1 + l2 + l3 and M = l1 l2 + l1 l3 + l2 l3 (the sum of C's
