@@ -31,8 +31,7 @@ VoxelBox slab_box(const VoxelKey& v, int k, SlabExtension e) {
 
 std::array<VoxelBox, 2> bridge_boxes(const VoxelKey& v, int k, int reach, const Eigen::Vector3d& position, const Eigen::Vector3d& sensor) {
     if (k < 1 || reach < 0) throw InvalidArgument("bridge boxes need k >= 1 and reach >= 0");
-    const Eigen::Vector3d r = position - sensor;
-    const int axis = std::abs(r.x()) >= std::abs(r.y()) ? 0 : 1, across = 1 - axis;
+    const int axis = radial_extension(position, sensor, 1).x ? 0 : 1, across = 1 - axis;  // the radial slabs' axis
     VoxelBox lower{v, v}, upper{v, v};
     for (VoxelBox* b : {&lower, &upper}) {
         b->lo[across] = v[across] - k;
@@ -44,7 +43,7 @@ std::array<VoxelBox, 2> bridge_boxes(const VoxelKey& v, int k, int reach, const 
     lower.hi[axis] = v[axis] - 1;
     upper.lo[axis] = v[axis];
     upper.hi[axis] = v[axis] + k - 1 + reach;
-    if (r[axis] >= 0) return {lower, upper};  // the sensor is on the lower side
+    if (position[axis] >= sensor[axis]) return {lower, upper};  // the sensor is on the lower side
     return {upper, lower};
 }
 
