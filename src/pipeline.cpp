@@ -140,7 +140,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
     arena.execute([&] {
         auto t0 = std::chrono::steady_clock::now();
-        if (config_.seeded_surface && evaluation == Evaluation::Fast) {
+        if (config.seeded_surface && evaluation == Evaluation::Fast) {
             SeededTsdf seeded = compute_seeded_tsdf(grid_, config, sensor_, EigenSolver::ClosedForm, previous_ ? &*previous_ : nullptr);
             summary_.seconds_tsdf = seconds_since(t0);
             summary_.tsdf_phases = seeded.timing;

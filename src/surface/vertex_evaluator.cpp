@@ -23,6 +23,13 @@ VertexSample make_sample(const LocalPlane& plane, const Eigen::Vector3d& v, int 
     return s;
 }
 
+// Whether v at `position` is one the bridges may define: bridges on, a single scan (a grid fused
+// from viewpoints has none), within bridge_range (horizontally) of the sensor.
+bool may_bridge(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const ReconstructionConfig& config, const VoxelGrid& grid) {
+    return config.bridges() && !grid.has_viewpoints() &&
+           (position - sensor_local).head<2>().squaredNorm() <= config.bridge_range * config.bridge_range;
+}
+
 }  // namespace
 
 bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config) {
@@ -105,10 +112,6 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
     return make_sample(*plane, position, level, confidence);
 }
 
-bool within_bridge_range(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const ReconstructionConfig& config) {
-    return (position - sensor_local).head<2>().squaredNorm() <= config.bridge_range * config.bridge_range;
-}
-
 VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const ReconstructionConfig& config,
                              const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
     // A ring on each side: half of Eq. (1) on either side of v.
@@ -156,7 +159,7 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
     };
     const Eigen::Vector3d position = v.cast<double>() * grid.voxel_size();
     const VertexSample s = choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
-    if (s.defined || !config.bridges() || grid.has_viewpoints() || !within_bridge_range(position, sensor_local, config)) return s;
+    if (s.defined || !may_bridge(position, sensor_local, config, grid)) return s;
     const auto boxes = bridge_boxes(v, config.k_max, config.bridge_extent(), position, sensor_local);
     return evaluate_bridge(merge_box(grid, boxes[0]), merge_box(grid, boxes[1]), position, config, sensor_local,
                            degenerate_lambda2(grid.voxel_size()), EigenSolver::Iterative);
@@ -195,7 +198,7 @@ VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey
         return stats(slab);
     };
     const VertexSample s = choose_level(stats_of, slab_of, position, config, sensor_local, degenerate_lambda2(window.voxel_size()), solver, counted);
-    if (s.defined || !config.bridges() || window.grid().has_viewpoints() || !within_bridge_range(position, sensor_local, config)) return s;
+    if (s.defined || !may_bridge(position, sensor_local, config, window.grid())) return s;
     const auto boxes = bridge_boxes(v, config.k_max, config.bridge_extent(), position, sensor_local);
     return evaluate_bridge(window.sum_box(boxes[0], v).to_stats(position), window.sum_box(boxes[1], v).to_stats(position), position, config,
                            sensor_local, degenerate_lambda2(window.voxel_size()), solver);

@@ -71,9 +71,6 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
 /// A bridge's plane must be within 45 degrees of horizontal: |n_z| >= cos 45 degrees.
 inline constexpr double kBridgeMinNormalZ = 0.70710678118654752;
 
-/// Whether `position` lies within config.bridge_range (horizontally) of the sensor.
-bool within_bridge_range(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const ReconstructionConfig& config);
-
 /// The bridge of a vertex no level defines (docs/method.md, "Bridges"; AN+GC on a single scan):
 /// `near` and `far` are the merged statistics of its two bridge_boxes (the sensor's side first).
 /// Defined, with the TSDF to the plane of both and a confidence below tau, when each holds
