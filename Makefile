@@ -11,7 +11,7 @@ CMAKE_FLAGS ?=
 # The demo picture: behind and above the sensor, looking ahead along the street.
 DEMO_CAMERA ?= --eye -24,-14,13 --target 8,1,-1.5 --fov 65
 
-.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-sensors accuracy-pcl map-peers install package-check pip-check viewer-check bare-check python clean
+.PHONY: setup configure build demo test sanitize tsan fuzz accuracy accuracy-sensors accuracy-pcl tiles-memory map-peers install package-check pip-check viewer-check bare-check python clean
 
 setup:
 	@bash scripts/setup.sh
@@ -77,6 +77,11 @@ accuracy: build
 # default, the paper's AN+GC and the Open3D peers on the same frames, within 30 m. PCL joins with
 # PCL_PEER=$(PCL_BUILD)/bin/lidarsurf_pcl_peer after `make accuracy-pcl`.
 SENSORS_DIR ?= $(BUILD)/accuracy-sensors
+# Long drives fused whole and in tiles: peak memory and time (docs/benchmarks.md, "Long drives in tiles").
+TILES_DIR ?= $(BUILD)/tiles
+tiles-memory: build
+	bash scripts/tiles_memory.sh $(BUILD)/bin/lidarsurf $(TILES_DIR)
+
 accuracy-sensors: build
 	@bash scripts/setup.sh peers
 	bash scripts/accuracy_sensors.sh $(BUILD)/bin/lidarsurf $(SENSORS_DIR)

@@ -2,6 +2,7 @@
 #include "cli_common.hpp"
 #include "lidarsurf/core/simd.hpp"
 
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -198,6 +199,20 @@ std::string read_text_file(const fs::path& path) {
     ss << in.rdbuf();
     if (in.bad()) throw IoError(path.string() + ": read error");
     return ss.str();
+}
+
+double resident_mib() {
+    long pages = 0, resident = 0;
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+        if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+        std::fclose(f);
+    }
+    return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
+}
+double peak_resident_mib() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return static_cast<double>(u.ru_maxrss) / 1024.0;
 }
 
 }  // namespace lidarsurf::cli

@@ -56,6 +56,9 @@ Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary);
 std::FILE* report_stream(const std::filesystem::path& output);
 
 double ms_since(std::chrono::steady_clock::time_point t0);
+/// This process's resident memory now, and its peak so far (MiB).
+double resident_mib();
+double peak_resident_mib();
 /// Lower-case extension with the dot (".ply"), "" when none.
 std::string extension_of(const std::filesystem::path& path);
 /// The whole file; IoError when it cannot be read.

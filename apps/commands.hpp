@@ -8,6 +8,9 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
+#include "lidarsurf/io/kitti_sequence.hpp"
+#include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/map/tiles.hpp"
 #include "lidarsurf/eval/map_metrics.hpp"
 
 namespace lidarsurf::cli {
@@ -54,7 +57,8 @@ CLI::App* add_bench_command(CLI::App& app, BenchOptions& o);
 int run_bench(const BenchOptions& o);
 
 struct FuseOptions {
-    std::string dir, output, mesh_format = "auto", calib, poses, json;
+    std::vector<std::string> dirs;  // one drive, or several whose poses share a world frame
+    std::string output, mesh_format = "auto", calib, poses, json;
     int first = 0, frames = 0, step = 1, remesh_every = 0;
     bool quiet = false;  // no progress report
     bool live = false;   // keep the live mesh, updated after every scan
@@ -63,10 +67,38 @@ struct FuseOptions {
     int serve = -1;            // --serve PORT: the live view on this port (-1: none; 0: a free one)
     std::string bind = "127.0.0.1";
     double rate = 0;           // scans a second (0: as fast as it goes)
+    TileConfig tiles{0.0};     // tile_size 0: the map whole, in memory
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
 };
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);
 int run_fuse(const FuseOptions& o);
+
+/// The drives `fuse` reads, resolved and checked: their scans one drive after the other.
+struct FuseInput {
+    struct Drive {
+        KittiSequence seq;
+        SequencePoses where;
+        std::vector<Eigen::Isometry3d> poses;
+    };
+    struct Scan {
+        std::size_t drive = 0, frame = 0;
+    };
+    std::vector<Drive> drives;
+    std::vector<Scan> scans;
+    MeshFormat format = MeshFormat::Auto;
+
+    const Eigen::Isometry3d& pose(std::size_t n) const { return drives[scans[n].drive].poses[scans[n].frame]; }
+    std::filesystem::path scan_path(std::size_t n) const { return drives[scans[n].drive].seq.scan(scans[n].frame); }
+    /// "000042", or "2:000042" (drive 2) with several drives.
+    std::string label(std::size_t n) const;
+    /// The drives' directories, and where their poses came from, for reports.
+    std::string name() const;
+    std::string layout() const;
+};
+/// Reads and checks the drives of `o` (poses, frame ranges), their files' roles included.
+FuseInput read_fuse_input(const FuseOptions& o);
+/// fuse --tile-size: the map in tiles, one after the other, the mesh written tile by tile.
+int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in);
 
 struct MapBenchmarkOptions {
     std::string dir, out, vdbfusion, fuse_options;

@@ -34,17 +34,18 @@ namespace lidarsurf::cli {
 
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     CLI::App* f = app.add_subcommand("fuse", "Fuse a sequence of scans with poses (KITTI odometry layout) into one mesh");
-    f->add_option("dir", o.dir,
+    f->add_option("dirs", o.dirs,
                   "Sequence directory: velodyne/000000.bin, ... with poses.txt (sensor-to-world lidar poses, as simulate "
-                  "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt)")
+                  "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt). "
+                  "Several: drives whose poses share one world frame, fused one after the other into one map")
         ->required();
     f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();
     f->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj")->capture_default_str();
     f->add_option("--poses", o.poses,
                   "Pose file (KITTI format, one 3x4 sensor-to-world pose a line), e.g. from your odometry; the lidar's "
                   "unless --calib is given");
-    f->add_option("--first", o.first, "First frame")->capture_default_str();
-    f->add_option("--frames", o.frames, "Frames to fuse (0 = to the last)")->capture_default_str();
+    f->add_option("--first", o.first, "First frame (of each drive)")->capture_default_str();
+    f->add_option("--frames", o.frames, "Frames to fuse of each drive (0 = to the last)")->capture_default_str();
     f->add_option("--step", o.step, "Use every step-th frame")->capture_default_str();
     f->add_option("--calib", o.calib,
                   "KITTI calib.txt: the poses are the left camera's (KITTI's published ones); its Tr: line converts them "
@@ -84,7 +85,14 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("--rate", o.rate, "Replay the scans at this many a second (0: as fast as they fuse), e.g. 10 for a recorded drive")
         ->type_name("HZ")
         ->capture_default_str();
-    f->add_option("--json", o.json, "Also write a report: times by stage, and per frame the time, voxels and resident memory");
+    f->add_option("--tile-size", o.tiles.tile_size,
+                  "Fuse the map in square tiles of this side (metres, e.g. 100), one after the other: memory follows a tile, "
+                  "not the map, and the mesh, written tile by tile, is the one fused whole (docs/method.md, \"Tiles\"); 0: whole")
+        ->type_name("METRES")
+        ->capture_default_str();
+    f->add_option("--tile-halo-cubes", o.tiles.halo_cubes, "With --tile-size: the surface search of a tile reaches this many cubes beyond it")
+        ->capture_default_str();
+    f->add_option("--json", o.json, "Also write a report: times by stage, and per frame (per tile with --tile-size) the time, voxels and resident memory");
     f->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     add_reconstruct_options(f, o.reconstruct);
     f->footer("--origin is the sensor's position in the scan frame (0,0,0 for KITTI's velodyne frame).\n"
@@ -93,6 +101,8 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
               "Examples:\n  lidarsurf simulate --frames 20 -o town && lidarsurf fuse town -o town.ply --remesh-every 1\n"
               "  lidarsurf fuse dataset/sequences/00 -o kitti00.ply --frames 200\n"
               "  lidarsurf fuse drive --poses drive_poses.txt -o drive.ply\n"
+              "  lidarsurf fuse monday tuesday -o street.ply          (two drives of one street, one world frame)\n"
+              "  lidarsurf fuse kitti00 -o kitti00.ply --tile-size 100                (flat memory on a drive of any length)\n"
               "  lidarsurf fuse town -o town.ply --serve 8080 --rate 10          (then open http://127.0.0.1:8080/)");
     return f;
 }
@@ -101,20 +111,54 @@ namespace {
 // The live mesh's staleness (docs/method.md, "Live mesh"): within 30 m of the sensor, 5 cm.
 constexpr double kStalenessRadius = 30.0, kStalenessTolerance = 0.05;
 
-double resident_mib() {
-    long pages = 0, resident = 0;
-    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
-        if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-        std::fclose(f);
-    }
-    return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
-}
-double peak_resident_mib() {
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return static_cast<double>(u.ru_maxrss) / 1024.0;
-}
 }  // namespace
+
+std::string FuseInput::label(std::size_t n) const {
+    const std::string frame = KittiSequence::frame_name(scans[n].frame);
+    return drives.size() > 1 ? std::to_string(scans[n].drive + 1) + ":" + frame : frame;
+}
+
+std::string FuseInput::name() const {
+    std::string out;
+    for (const Drive& d : drives) out += (out.empty() ? "" : " + ") + d.seq.dir.string();
+    return out;
+}
+
+std::string FuseInput::layout() const {
+    std::string out;
+    for (const Drive& d : drives) out += (out.empty() ? "" : ", ") + d.where.layout;
+    return out;
+}
+
+FuseInput read_fuse_input(const FuseOptions& o) {
+    if (o.dirs.size() > 1 && !o.poses.empty())
+        throw InvalidArgument("--poses names the poses of one drive: with several drives, put each one's in its poses.txt");
+    FuseInput in;
+    FileRoles files;
+    for (const std::string& dir : o.dirs) {
+        FuseInput::Drive d{KittiSequence{dir}, {}, {}};
+        const std::size_t available = d.seq.frame_count();  // IoError when there is no velodyne/
+        d.where = find_sequence_poses(d.seq.dir, o.poses, o.calib);
+        d.poses = read_sequence_poses(d.where);
+        if (d.poses.size() < available)
+            throw InvalidInput(d.where.poses.string() + ": " + std::to_string(d.poses.size()) + " poses for " + std::to_string(available) + " scans");
+        const auto first = static_cast<std::size_t>(o.first);
+        if (first >= available)
+            throw InvalidArgument("--first " + std::to_string(first) + ": the sequence " + dir + " has " + std::to_string(available) + " scans");
+        std::size_t taken = 0;
+        for (std::size_t i = first; i < available && (o.frames == 0 || taken < static_cast<std::size_t>(o.frames));
+             i += static_cast<std::size_t>(o.step), ++taken)
+            in.scans.push_back({in.drives.size(), i});
+        files.input_sequence(d.seq.dir);
+        files.input(d.where.poses);
+        if (!d.where.calib.empty()) files.input(d.where.calib);
+        in.drives.push_back(std::move(d));
+    }
+    files.output(o.output, "-o");
+    if (!o.json.empty()) files.output(o.json, "--json");
+    files.check();
+    return in;
+}
 
 int run_fuse(const FuseOptions& o) {
     if (o.first < 0 || o.frames < 0 || o.step < 1 || o.remesh_every < 0)
@@ -131,30 +175,17 @@ int run_fuse(const FuseOptions& o) {
     if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
     if (live) LiveMesh::check(m.config);  // before any scan is read
     const MeshFormat requested = parse_mesh_format(o.mesh_format);
-    const KittiSequence seq{o.dir};
-    const std::size_t available = seq.frame_count();  // IoError when there is no velodyne/
-    const SequencePoses where = find_sequence_poses(seq.dir, o.poses, o.calib);
-    const std::vector<Eigen::Isometry3d> poses = read_sequence_poses(where);
-    if (poses.size() < available)
-        throw InvalidInput(where.poses.string() + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(available) + " scans");
-    const auto first = static_cast<std::size_t>(o.first);
-    if (first >= available)
-        throw InvalidArgument("--first " + std::to_string(first) + ": the sequence has " + std::to_string(available) + " scans");
-    std::vector<std::size_t> frames;
-    for (std::size_t i = first; i < available && (o.frames == 0 || frames.size() < static_cast<std::size_t>(o.frames));
-         i += static_cast<std::size_t>(o.step))
-        frames.push_back(i);
-    FileRoles files;
-    files.input_sequence(seq.dir);
-    files.input(where.poses);
-    if (!where.calib.empty()) files.input(where.calib);
-    files.output(o.output, "-o");
-    if (!o.json.empty()) files.output(o.json, "--json");
-    files.check();
+    FuseInput in = read_fuse_input(o);
     const MeshFormat format = mesh_format_for(o.output, requested);  // .stl: exit 2 now
+    in.format = format;
+    if (o.tiles.tile_size != 0) {
+        if (live || o.remesh_every > 0) throw InvalidArgument("--tile-size meshes each tile once, at its end: not with --live, --serve or --remesh-every");
+        o.tiles.validate();
+        return run_fuse_tiles(o, m, in);
+    }
     std::FILE* const report = report_stream(o.output);
 
-    Reconstructor rec(m.config, poses[frames.front()] * m.sensor);
+    Reconstructor rec(m.config, in.pose(0) * m.sensor);
     Mesh mesh;
     double read_ms = 0;
     bool fresh = false;  // whether `mesh` holds every frame fused so far
@@ -167,32 +198,33 @@ int run_fuse(const FuseOptions& o) {
         LiveServerConfig sc;
         sc.bind = o.bind;
         sc.port = o.serve;
-        nlohmann::json data = {{"title", fs::path(seq.dir).filename().string() + " (live)"}, {"colour", "height"}, {"live", true}};
+        nlohmann::json data = {{"title", fs::path(in.drives.front().seq.dir).filename().string() + " (live)"}, {"colour", "height"}, {"live", true}};
         server = std::make_unique<LiveServer>(sc, viewer_page(data));
         const bool v6 = o.bind.find(':') != std::string::npos;
         address = "http://" + (v6 ? "[" + o.bind + "]" : o.bind) + ":" + std::to_string(server->port()) + "/";
         std::fprintf(stderr, "fuse: the live view is at %s\n", address.c_str());
     }
-    Progress progress("fuse", "frames", frames.size(), o.quiet);
+    const std::size_t count = in.scans.size();
+    Progress progress("fuse", "frames", count, o.quiet);
     const auto start = std::chrono::steady_clock::now();
-    for (std::size_t n = 0; n < frames.size(); ++n) {
-        const std::size_t i = frames[n];
+    for (std::size_t n = 0; n < count; ++n) {
         if (o.rate > 0) std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                                   std::chrono::duration<double>(static_cast<double>(n) / o.rate)));
         auto t0 = std::chrono::steady_clock::now();
-        PointCloud cloud = read_points(seq.scan(i), m.read);
-        const Eigen::Isometry3d& pose = poses[i];
+        PointCloud cloud = read_points(in.scan_path(n), m.read);
+        const Eigen::Isometry3d& pose = in.pose(n);
         for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN: integrate drops it
         read_ms += ms_since(t0);
         const double before = rec.summary().seconds_insert + rec.summary().seconds_carve;
         const auto t_update = std::chrono::steady_clock::now();
         rec.integrate(cloud.points, pose * m.sensor);
-        nlohmann::json row = {{"frame", i},
+        nlohmann::json row = {{"frame", in.scans[n].frame},
+                              {"drive", in.scans[n].drive},
                               {"integrate_ms", 1e3 * (rec.summary().seconds_insert + rec.summary().seconds_carve - before)},
                               {"voxels", rec.summary().voxels}};
         // The exact mesh along the way: for --remesh-every, and for the live mesh's check (one
         // extraction when both fall on this scan).
-        auto falls_here = [&](int every) { return every > 0 && ((n + 1) % static_cast<std::size_t>(every) == 0 || n + 1 == frames.size()); };
+        auto falls_here = [&](int every) { return every > 0 && ((n + 1) % static_cast<std::size_t>(every) == 0 || n + 1 == count); };
         const bool remesh = falls_here(o.remesh_every), check = live && falls_here(o.live_check_every);
         if (live) {
             MeshDelta delta = rec.update_mesh(o.live_budget_ms);
@@ -227,7 +259,7 @@ int run_fuse(const FuseOptions& o) {
             const ReconstructionSummary& s = rec.summary();
             row["remesh_ms"] = 1e3 * (s.seconds_tsdf + s.seconds_mesh);
             std::fprintf(report, "frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
-                        KittiSequence::frame_name(i).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles,
+                        in.label(n).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles,
                         1e3 * s.seconds_tsdf, 1e3 * s.seconds_mesh);
             std::fflush(report);
         }
@@ -241,14 +273,14 @@ int run_fuse(const FuseOptions& o) {
     write_mesh(mesh, o.output, format);
     const double write_ms = ms_since(t0);
     const ReconstructionSummary& s = rec.summary();
-    std::fprintf(report, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", o.dir.c_str(), frames.size(),
-                method_name(m).c_str(), where.layout.c_str(), s.to_string().c_str(), read_ms, write_ms, o.output.c_str());
+    std::fprintf(report, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", in.name().c_str(), count,
+                method_name(m).c_str(), in.layout().c_str(), s.to_string().c_str(), read_ms, write_ms, o.output.c_str());
     if (!o.json.empty()) {
-        nlohmann::json j = {{"sequence", o.dir},
-                                  {"poses", where.poses.string()},
+        nlohmann::json j = {{"sequence", in.name()},
+                                  {"poses", in.layout()},
                                   {"method", method_name(m)},
                                   {"carve", m.config.carve},
-                                  {"frames", frames.size()},
+                                  {"frames", count},
                                   {"points", s.points_read},
                                   {"voxels", s.voxels},
                                   {"carved_voxels", s.carved_voxels},
@@ -293,8 +325,8 @@ int run_fuse(const FuseOptions& o) {
     }
     if (server) {
         // The page keeps the final map: the exact mesh, block for block in place of the live one.
-        server->finish(split_into_blocks(mesh, rec.grid().origin(), m.config.voxel_size), poses[frames.back()],
-                       static_cast<std::uint32_t>(frames.size()));
+        server->finish(split_into_blocks(mesh, rec.grid().origin(), m.config.voxel_size), in.pose(count - 1),
+                       static_cast<std::uint32_t>(count));
         std::fprintf(stderr, "fuse: %s written; the final map is at %s until Ctrl-C\n", o.output.c_str(), address.c_str());
         finish_on_interrupt();
         wait_for_exit();

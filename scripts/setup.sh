@@ -19,6 +19,7 @@ PKGS=(
   python3-matplotlib   # benchmark plots (Fig. 6)
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
+  python3-distributed  # Dask: a map fused in tiles on many workers (lidarsurf.fuse_tiles)
 )
 # npm fetches three.js for the viewer (below); a machine with Node.js from elsewhere has npm already,
 # and Debian's npm package would conflict with it.

@@ -44,25 +44,49 @@ std::string ReconstructionSummary::to_string() const {
     return buf;
 }
 
-Reconstructor::Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor)
-    : config_(validated(config)), sensor_(sensor), grid_(config.voxel_size), last_viewpoint_(sensor) {
+Reconstructor::Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor, const std::optional<Eigen::Vector3d>& grid_origin)
+    : config_(validated(config)), sensor_(sensor), grid_(config.voxel_size, grid_origin), last_viewpoint_(sensor) {
     if (!sensor.allFinite()) throw InvalidArgument("sensor origin must be finite");
 }
 
 void Reconstructor::integrate(const PointCloud& cloud) { integrate(std::span<const Eigen::Vector3d>(cloud.points)); }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
-    add(points, grid_.has_viewpoints() ? std::optional<Eigen::Vector3d>(sensor_) : std::nullopt);
+    add(points, grid_.has_viewpoints() ? std::optional<Eigen::Vector3d>(sensor_) : std::nullopt, points);
 }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint) {
+    integrate_seen(points, viewpoint, points);
+}
+
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep) {
+    std::vector<Eigen::Vector3d> kept;
+    for (const Eigen::Vector3d& p : points)
+        if (keep.contains(p)) kept.push_back(p);  // a non-finite point is in no box
+    integrate_seen(kept, viewpoint, points);  // summary().points_read counts the points kept
+}
+
+void Reconstructor::integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint,
+                                   std::span<const Eigen::Vector3d> scan) {
     if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
     if (!grid_.has_viewpoints()) {
         grid_.enable_viewpoints(sensor_);  // the points integrated before were seen from the sensor
         if (grid_.point_count() > 0) previous_.reset();  // every orientation may change: evaluate all again
     }
-    add(points, viewpoint);
+    add(points, viewpoint, scan);
     last_viewpoint_ = viewpoint;
+}
+
+void Reconstructor::skip_scan() {
+    if (carver_) carver_->skip();
+    else ++skipped_scans_;
+}
+
+void Reconstructor::ensure_carver() {
+    if (carver_) return;
+    carver_.emplace(config_.carve_margin_voxels * config_.voxel_size, config_.carve_min_scans, config_.carve_range, config_.carve_stale_scans);
+    carver_->skip(skipped_scans_);
+    skipped_scans_ = 0;
 }
 
 MeshDelta Reconstructor::update_mesh(double budget_ms) {
@@ -72,7 +96,8 @@ MeshDelta Reconstructor::update_mesh(double budget_ms) {
     return arena.execute([&] { return live_->update(grid_, sensor_, last_viewpoint_, budget_ms / 1e3); });
 }
 
-void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from) {
+void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
+                        std::span<const Eigen::Vector3d> scan) {
     const auto t0 = std::chrono::steady_clock::now();
     // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points):
     // a frame cut in two chunks paid two groupings and two parallel updates (0.6-0.8 ms).
@@ -81,8 +106,7 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     // Free-space carving: on scans seen from a known position (sequences), after the scan's points.
     const bool carving = config_.carve && grid_.has_viewpoints() && seen_from;
-    if (carving && !carver_) carver_.emplace(config_.carve_margin_voxels * config_.voxel_size, config_.carve_min_scans, config_.carve_range,
-                                                config_.carve_stale_scans);
+    if (carving) ensure_carver();
     std::vector<VoxelGrid::Hit> hits, chunk_hits;
     for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
         const std::size_t end = std::min(points.size(), begin + kChunk);
@@ -116,7 +140,7 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     summary_.seconds_insert += seconds_since(t0);
     if (carving) {
         const auto t1 = std::chrono::steady_clock::now();
-        const CarvingStats carved = arena.execute([&] { return carver_->carve(grid_, points, hits, *seen_from); });
+        const CarvingStats carved = arena.execute([&] { return carver_->carve(grid_, scan, hits, *seen_from); });
         summary_.carved_voxels += carved.removed;
         summary_.seconds_carve += seconds_since(t1);
     }
@@ -181,6 +205,40 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
             }
         }
         remove_small_components(mesh, static_cast<std::size_t>(config_.min_component_triangles));
+        summary_.seconds_mesh = seconds_since(t0);
+    });
+    summary_.mesh_vertices = mesh.vertices.size();
+    summary_.mesh_triangles = mesh.triangles.size();
+    return mesh;
+}
+
+Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function<bool(const VoxelKey&)>& owns) {
+    if (!config_.seeded_surface) throw InvalidArgument("a part of a map is meshed with the seeded surface (not the paper as written)");
+    if (config_.min_component_triangles > 0)
+        throw InvalidArgument("min_component_triangles filters the whole map's components: not for a part of it");
+    if (grid_.point_count() == 0) throw InvalidInput("the input has no points");
+    const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
+    // The estimate covers every block the grid holds: an upper bound for a region of it.
+    const auto budget = static_cast<std::size_t>(budget_bytes());
+    summary_.memory_estimate = grid_.memory_bytes() + (carver_ ? carver_->memory_bytes() : 0) +
+                               estimate_extraction_bytes(grid_, config, Evaluation::Fast, budget);
+    if (summary_.memory_estimate > budget)
+        throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
+                                        format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) + " blocks"));
+    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
+    Mesh mesh;
+    arena.execute([&] {
+        auto t0 = std::chrono::steady_clock::now();
+        SeededTsdf seeded = compute_seeded_tsdf(grid_, config, sensor_, EigenSolver::ClosedForm, nullptr, &region);
+        summary_.seconds_tsdf = seconds_since(t0);
+        summary_.tsdf_phases = seeded.timing;
+        summary_.candidate_vertices = seeded.evaluated;
+        summary_.reused_vertices = 0;
+        summary_.defined_vertices = seeded.field.size();
+        t0 = std::chrono::steady_clock::now();
+        std::erase_if(seeded.cubes, [&](const VoxelKey& cube) { return !owns(cube); });
+        mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, placement);
         summary_.seconds_mesh = seconds_since(t0);
     });
     summary_.mesh_vertices = mesh.vertices.size();

@@ -2,11 +2,13 @@
 // The reconstruction pipeline (Sec. III): points -> voxel statistics -> adaptive TSDF ->
 // marching cubes. Composes the modules; holds the voxel grid so more scans can be integrated.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
@@ -48,7 +50,11 @@ enum class Evaluation {
 class Reconstructor {
 public:
     /// Validates `config` (throws InvalidArgument). `sensor` orients the normals (Eq. 2).
-    Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor);
+    /// `grid_origin` (world) fixes the voxel lattice's local origin (VoxelGrid): by default the
+    /// first point integrated sets it; the parts of one map fused apart (map/tiles.hpp) all take
+    /// the one the whole map would have, so that their statistics agree to the last bit.
+    Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor,
+                  const std::optional<Eigen::Vector3d>& grid_origin = std::nullopt);
 
     /// Adds the finite points of `cloud` to the voxel statistics; counts the others as dropped.
     /// Throws ResourceLimit (with an estimate) when the grid would outgrow config.max_memory_mb.
@@ -65,6 +71,13 @@ public:
     /// as seen from the constructor's sensor. Turning them on after points were integrated makes
     /// the next extraction evaluate every vertex again. Throws InvalidArgument if not finite.
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
+    /// A part of a map (map/tiles.hpp): of the scan's points seen from `viewpoint`, only those
+    /// inside `keep` (world) are integrated, while free-space carving takes the whole scan (a ray
+    /// through the part may return outside it). summary().points_read counts the points kept.
+    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep);
+    /// A scan of a sequence that reaches nothing of this grid (a part of a map, map/tiles.hpp):
+    /// free-space carving counts it, as it counts every scan of the drive.
+    void skip_scan();
 
     /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated and
     /// ResourceLimit if the grid plus estimate_extraction_bytes exceeds config.max_memory_mb.
@@ -75,6 +88,14 @@ public:
     /// that (summary().reused_vertices). The mesh is the one a single extraction after all the
     /// integrations gives. The reference path always evaluates every vertex.
     Mesh extract_mesh(Evaluation evaluation = Evaluation::Fast);
+
+    /// The mesh of the cubes that `owns` accepts (cube = its minimum corner, grid keys), with the
+    /// surface search kept to `region` (SearchRegion): a part of a map meshed apart
+    /// (map/tiles.hpp). The same vertex values and marching cubes as extract_mesh(); the cubes are
+    /// those the search reaches without leaving the region. Throws InvalidArgument without the
+    /// seeded surface or with min_component_triangles (a filter over the whole map), InvalidInput
+    /// if no point was integrated, ResourceLimit as extract_mesh() (the estimate of the whole grid).
+    Mesh extract_mesh(const SearchRegion& region, const std::function<bool(const VoxelKey&)>& owns);
 
     /// Brings the live mesh up to date with the scans integrated since the last call, nearest the
     /// last viewpoint first, within `budget_ms` milliseconds (<= 0: everything due), and returns
@@ -93,7 +114,12 @@ public:
     const ReconstructionConfig& config() const { return config_; }
 
 private:
-    void add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from);
+    /// integrate(points, viewpoint) of `points`, taken from the whole scan `scan` (carving sees it).
+    void integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3d> scan);
+    /// Inserts `points`; carving (on) sees `scan`, the whole scan they are taken from.
+    void add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
+             std::span<const Eigen::Vector3d> scan);
+    void ensure_carver();
     double budget_bytes() const;
     std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;
 
@@ -105,6 +131,7 @@ private:
     VoxelGrid grid_;
     std::optional<TsdfField> previous_;  // the last fast extraction's field, for the next one
     std::optional<FreeSpaceCarver> carver_;  // with config.carve, from the first scan with a viewpoint
+    std::uint32_t skipped_scans_ = 0;        // skip_scan() calls before the carver was made
     std::optional<LiveMesh> live_;           // from the first update_mesh()
     Eigen::Vector3d last_viewpoint_;         // where the last scan was seen from: the live mesh's nearest blocks go first
     ReconstructionSummary summary_;

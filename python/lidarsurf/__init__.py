@@ -12,14 +12,39 @@ import json as _json
 import collections as _collections
 import os as _os
 
-from ._lidarsurf import (Config, Mesh, MeshDelta, Reconstructor, __version__, decode_live_message, points_view, read_mesh,
-                         read_points, read_poses, read_rings, reconstruct, rings_from_order, set_simd_level, simd_level,
-                         simd_levels, simulate)
+from ._lidarsurf import (Config, Mesh, MeshDelta, Reconstructor, TileConfig, TilePlan, __version__, decode_live_message,
+                         fuse_tile, points_view, read_mesh, read_points, read_poses, read_rings, reconstruct, rings_from_order,
+                         sequence_reaches, set_simd_level, simd_level, simd_levels, simulate)
 from ._lidarsurf import _evaluate_json, _ring_holdout_json
 
 __all__ = ["Config", "Mesh", "MeshDelta", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "read_rings", "evaluate",
            "ring_holdout", "rings_from_order", "simulate", "points_view", "simd_level", "simd_levels", "set_simd_level",
-           "LiveUpdate", "fuse_live", "decode_live_message", "__version__"]
+           "LiveUpdate", "fuse_live", "decode_live_message", "TileConfig", "TilePlan", "sequence_reaches", "fuse_tile", "fuse_tiles",
+           "TileResult", "__version__"]
+
+
+# A Config travels to other processes (Dask workers) as its fields.
+_CONFIG_FIELDS = sorted(name for name in dir(Config) if isinstance(getattr(Config, name), property))
+
+
+def _config_from(fields):
+    c = Config()
+    for name, value in fields.items():
+        setattr(c, name, value)
+    return c
+
+
+Config.__reduce__ = lambda self: (_config_from, ({name: getattr(self, name) for name in _CONFIG_FIELDS},))
+
+
+
+def __getattr__(name):
+    # fuse_tiles and TileResult live in lidarsurf.tiles, imported on first use: `python3 -m
+    # lidarsurf.tiles` then runs a module the package has not imported yet.
+    if name in ("fuse_tiles", "TileResult"):
+        from . import tiles
+        return getattr(tiles, name)
+    raise AttributeError(f"module 'lidarsurf' has no attribute '{name}'")
 
 LiveUpdate = _collections.namedtuple("LiveUpdate", ["scan", "pose", "delta"])
 LiveUpdate.__doc__ = """One scan of fuse_live(): its index in the sequence, the sensor's (4, 4) pose, and the MeshDelta."""

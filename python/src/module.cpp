@@ -29,6 +29,10 @@
 namespace py = pybind11;
 using namespace lidarsurf;
 
+namespace lidarsurf {
+void bind_tiles(py::module_& m);  // tiles.cpp
+}
+
 namespace {
 
 using PointArray = py::array_t<double, py::array::c_style>;
@@ -655,4 +659,6 @@ PYBIND11_MODULE(_lidarsurf, m) {
         py::arg("scene") = "demo", py::arg("seed") = 1, py::arg("ground_truth") = false,
         "Simulate an HDL-64E scan of a built-in scene from the origin, as an (N, 3) array; ground_truth=True gives\n"
         "the co-located noise-free 316-beam scan used as ground truth.");
+
+    bind_tiles(m);
 }

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <iomanip>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "ply_format.hpp"
+#include "ply_writer.hpp"
 
 namespace lidarsurf {
 
@@ -42,60 +44,90 @@ bool needs_double(const Mesh& mesh) {
 
 }  // namespace
 
-void write_ply(const Mesh& mesh, std::ostream& out, bool binary) {
-    mesh.check();
-    const bool dbl = needs_double(mesh);
-    const bool has_n = !mesh.normals.empty(), has_k = !mesh.levels.empty(), has_c = !mesh.confidence.empty();
-    out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
+namespace detail {
+
+PlyLayout PlyLayout::of(const Mesh& mesh, bool binary, bool dbl) {
+    return {binary, dbl, !mesh.normals.empty(), !mesh.levels.empty(), !mesh.confidence.empty()};
+}
+
+void write_ply_header(std::ostream& out, const PlyLayout& l, std::uint64_t vertices, std::uint64_t faces) {
+    out << "ply\nformat " << (l.binary ? "binary_little_endian" : "ascii") << " 1.0\n"
         << "comment lidarsurf mesh; level = neighbourhood level k', confidence = Eq. (3) value\n"
-        << "element vertex " << mesh.vertices.size() << "\n";
-    const char* t = dbl ? "double" : "float";
+        << "element vertex " << vertices << "\n";
+    const char* t = l.dbl ? "double" : "float";
     out << "property " << t << " x\nproperty " << t << " y\nproperty " << t << " z\n";
-    if (has_n) out << "property float nx\nproperty float ny\nproperty float nz\n";
-    if (has_k) out << "property uchar level\n";
-    if (has_c) out << "property float confidence\n";
-    out << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
-    if (binary) {
-        // The body is laid out in 1 MiB pieces, each written at once: a stream write per value cost
-        // ~12 ms per KITTI frame (about 1 M calls), more than marching cubes, and a buffer of the
-        // whole body doubled the mesh's memory at the end of a run.
-        const std::size_t vertex_bytes = 3 * (dbl ? sizeof(double) : sizeof(float)) + (has_n ? 3 * sizeof(float) : 0) +
-                                         (has_k ? sizeof(std::uint8_t) : 0) + (has_c ? sizeof(float) : 0);
-        constexpr std::size_t kFaceBytes = sizeof(std::uint8_t) + 3 * sizeof(std::int32_t);
-        constexpr std::size_t kPiece = std::size_t{1} << 20;
-        std::vector<char> piece(kPiece);
-        char* at = piece.data();
-        const auto room_for = [&](std::size_t bytes) {
-            if (static_cast<std::size_t>(at - piece.data()) + bytes <= piece.size()) return;
-            out.write(piece.data(), at - piece.data());
-            at = piece.data();
-        };
+    if (l.normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
+    if (l.levels) out << "property uchar level\n";
+    if (l.confidence) out << "property float confidence\n";
+    out << "element face " << faces << "\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+// The body is laid out in 1 MiB pieces, each written at once: a stream write per value cost
+// ~12 ms per KITTI frame (about 1 M calls), more than marching cubes, and a buffer of the
+// whole body doubled the mesh's memory at the end of a run.
+void write_ply_vertices(std::ostream& out, const PlyLayout& l, const Mesh& mesh, std::span<const std::int64_t> existing) {
+    const auto written = [&](std::size_t i) { return !existing.empty() && existing[i] >= 0; };
+    if (!l.binary) {
+        out << std::setprecision(l.dbl ? 15 : 9);
         for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-            room_for(vertex_bytes);
+            if (written(i)) continue;
             const auto& v = mesh.vertices[i];
-            for (int a = 0; a < 3; ++a) at = dbl ? put<double>(at, v[a]) : put<float>(at, static_cast<float>(v[a]));
-            if (has_n) for (int a = 0; a < 3; ++a) at = put<float>(at, mesh.normals[i][a]);
-            if (has_k) at = put<std::uint8_t>(at, mesh.levels[i]);
-            if (has_c) at = put<float>(at, mesh.confidence[i]);
+            out << v.x() << ' ' << v.y() << ' ' << v.z();
+            if (l.normals) out << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
+            if (l.levels) out << ' ' << static_cast<int>(mesh.levels[i]);
+            if (l.confidence) out << ' ' << mesh.confidence[i];
+            out << '\n';
         }
-        for (const auto& tri : mesh.triangles) {
-            room_for(kFaceBytes);
-            at = put<std::uint8_t>(at, 3);
-            for (auto i : tri) at = put<std::int32_t>(at, static_cast<std::int32_t>(i));
-        }
-        out.write(piece.data(), at - piece.data());
         return;
     }
-    out << std::setprecision(dbl ? 15 : 9);
+    const std::size_t vertex_bytes = 3 * (l.dbl ? sizeof(double) : sizeof(float)) + (l.normals ? 3 * sizeof(float) : 0) +
+                                     (l.levels ? sizeof(std::uint8_t) : 0) + (l.confidence ? sizeof(float) : 0);
+    constexpr std::size_t kPiece = std::size_t{1} << 20;
+    std::vector<char> piece(kPiece);
+    char* at = piece.data();
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        if (written(i)) continue;
+        if (static_cast<std::size_t>(at - piece.data()) + vertex_bytes > piece.size()) out.write(piece.data(), at - piece.data()), at = piece.data();
         const auto& v = mesh.vertices[i];
-        out << v.x() << ' ' << v.y() << ' ' << v.z();
-        if (has_n) out << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
-        if (has_k) out << ' ' << static_cast<int>(mesh.levels[i]);
-        if (has_c) out << ' ' << mesh.confidence[i];
-        out << '\n';
+        for (int a = 0; a < 3; ++a) at = l.dbl ? put<double>(at, v[a]) : put<float>(at, static_cast<float>(v[a]));
+        if (l.normals) for (int a = 0; a < 3; ++a) at = put<float>(at, mesh.normals[i][a]);
+        if (l.levels) at = put<std::uint8_t>(at, mesh.levels[i]);
+        if (l.confidence) at = put<float>(at, mesh.confidence[i]);
     }
-    for (const auto& tri : mesh.triangles) out << "3 " << tri[0] << ' ' << tri[1] << ' ' << tri[2] << '\n';
+    out.write(piece.data(), at - piece.data());
+}
+
+void write_ply_faces(std::ostream& out, const PlyLayout& l, std::span<const std::array<std::uint32_t, 3>> triangles,
+                     const std::function<std::uint64_t(std::uint32_t)>& index) {
+    const auto checked = [&](std::uint32_t i) {
+        const std::uint64_t g = index ? index(i) : i;
+        if (g > static_cast<std::uint64_t>(INT32_MAX)) throw InvalidInput("PLY: more than 2^31 vertices");
+        return static_cast<std::int32_t>(g);
+    };
+    if (!l.binary) {
+        for (const auto& tri : triangles) out << "3 " << checked(tri[0]) << ' ' << checked(tri[1]) << ' ' << checked(tri[2]) << '\n';
+        return;
+    }
+    constexpr std::size_t kFaceBytes = sizeof(std::uint8_t) + 3 * sizeof(std::int32_t);
+    constexpr std::size_t kPiece = std::size_t{1} << 20;
+    std::vector<char> piece(kPiece);
+    char* at = piece.data();
+    for (const auto& tri : triangles) {
+        if (static_cast<std::size_t>(at - piece.data()) + kFaceBytes > piece.size()) out.write(piece.data(), at - piece.data()), at = piece.data();
+        at = put<std::uint8_t>(at, 3);
+        for (auto i : tri) at = put<std::int32_t>(at, checked(i));
+    }
+    out.write(piece.data(), at - piece.data());
+}
+
+}  // namespace detail
+
+void write_ply(const Mesh& mesh, std::ostream& out, bool binary) {
+    mesh.check();
+    const detail::PlyLayout l = detail::PlyLayout::of(mesh, binary, needs_double(mesh));
+    detail::write_ply_header(out, l, mesh.vertices.size(), mesh.triangles.size());
+    detail::write_ply_vertices(out, l, mesh, {});
+    detail::write_ply_faces(out, l, mesh.triangles, {});
 }
 
 void write_obj(const Mesh& mesh, std::ostream& out) {

@@ -187,3 +187,58 @@ TEST(FreeSpace, AWalkersPathInFrontOfTheWallIsMostlyCarved) {
     const Box wall{{-5.0, kWallY - 0.2, 0.3}, {20.0, kWallY + 0.2, 3.0}};
     EXPECT_GE(triangles_in(carved, wall), triangles_in(kept, wall) * 98 / 100);
 }
+
+TEST(FreeSpace, SkippingScansThatReachNothingIsCarvingThem) {
+    // The reference: scans far away (5 km) carved for real, their returns reaching no voxel of
+    // the grid; the fast path counts them (skip). The drive stops in the middle for those scans,
+    // long enough for the planar voxels to go stale (8 scans counted) and the young ones to be dropped.
+    constexpr int kStale = 8, kAway = 6;
+    struct Run {
+        VoxelGrid grid{0.2};
+        FreeSpaceCarver carver{0.4, 2, 40.0, kStale};
+        std::size_t removed = 0;
+    };
+    const Eigen::Vector3d away(5000, 0, 0);
+    const auto drive = [&](Run& r, int mode) {  // 0: carve the far scans, 1: skip them, 2: neither
+        r.grid.enable_viewpoints(sensor_at(0));
+        for (int i = 0; i < kScans; ++i) {
+            if (i == kScans / 2)
+                for (int k = 0; k < kAway; ++k) {
+                    if (mode == 1) r.carver.skip();
+                    if (mode != 0) continue;
+                    std::vector<Eigen::Vector3d> far = scan(i, true);
+                    for (Eigen::Vector3d& p : far) p += away;
+                    r.removed += r.carver.carve(r.grid, far, {}, sensor_at(i) + away).removed;
+                }
+            const std::vector<Eigen::Vector3d> points = scan(i, true);
+            std::vector<VoxelGrid::Hit> hits;
+            r.grid.insert(points, sensor_at(i), &hits);
+            r.removed += r.carver.carve(r.grid, points, hits, sensor_at(i)).removed;
+        }
+    };
+    Run carved, skipped, unaware;
+    drive(carved, 0);
+    drive(skipped, 1);
+    drive(unaware, 2);
+    // The voxels whose evidence differs from the reference's (a voxel missing counts).
+    const auto differences = [&](const Run& r) {
+        std::size_t n = r.grid.size() > carved.grid.size() ? r.grid.size() - carved.grid.size() : 0;
+        for (std::size_t v = 0; v < carved.grid.size(); ++v) {
+            const VoxelStats* s = r.grid.find(carved.grid.keys()[v]);
+            if (!s) {
+                ++n;
+                continue;
+            }
+            const auto w = static_cast<std::size_t>(s - r.grid.stats().data());
+            n += r.carver.hit_scans(w) != carved.carver.hit_scans(v) || r.carver.pass_scans(w) != carved.carver.pass_scans(v);
+        }
+        return n;
+    };
+    ASSERT_GT(carved.removed, 100u);
+    EXPECT_EQ(skipped.carver.scans(), carved.carver.scans());
+    EXPECT_EQ(skipped.removed, carved.removed);
+    EXPECT_EQ(skipped.grid.size(), carved.grid.size());
+    EXPECT_EQ(differences(skipped), 0u);
+    // Not counting them gives other evidence: the count is not a formality.
+    EXPECT_GT(differences(unaware), 0u);
+}

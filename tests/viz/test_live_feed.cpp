@@ -42,11 +42,9 @@ TEST(LiveFeed, EveryClientEndsWithTheLiveMeshHoweverItReads) {
     const LiveFeed::Client eager_id = feed.add_client(), slow_id = feed.add_client();
     LiveFeed::Client late_id = 0;
     std::set<std::tuple<int, int, int>> missed;  // what the slow client missed since its last read
-    std::size_t removed = 0;
     for (std::size_t i = 0; i < drive.size(); ++i) {
         rec.integrate(drive[i].points, drive[i].from);
-        MeshDelta delta = rec.update_mesh(5.0);  // a budget: blocks wait, carving removes some
-        removed += delta.removed.size();
+        MeshDelta delta = rec.update_mesh(5.0);  // a budget: blocks wait, carving may empty some
         const auto keys = keys_of(delta);
         missed.insert(keys.begin(), keys.end());
         feed.publish(std::move(delta), drive[i].pose, static_cast<std::uint32_t>(i + 1));
@@ -69,7 +67,8 @@ TEST(LiveFeed, EveryClientEndsWithTheLiveMeshHoweverItReads) {
             test::expect_same_blocks(slow.blocks, rec.live()->blocks(), "slow client, scan " + std::to_string(i));
         }
     }
-    // Blocks left without a triangle (the drive's carving empties none): three of them go.
+    // Three blocks left without a triangle go; the eager client read every earlier update, so its
+    // last message holds exactly these three removals.
     MeshDelta removal;
     std::vector<MeshBlock> expected = rec.live()->blocks();
     for (int k = 0; k < 3; ++k) {
@@ -78,7 +77,7 @@ TEST(LiveFeed, EveryClientEndsWithTheLiveMeshHoweverItReads) {
     }
     feed.publish(removal, drive.back().pose, static_cast<std::uint32_t>(drive.size()));
     drain(feed, eager_id, eager);
-    EXPECT_EQ(eager.headers_only.back().removed.size(), 3u + removed);
+    EXPECT_EQ(eager.headers_only.back().removed.size(), 3u);
     test::expect_same_blocks(eager.blocks, expected, "eager client, after the removals");
     drain(feed, late_id, late);
     EXPECT_TRUE(late.headers_only.front().header.flags & live_stream::kReset);

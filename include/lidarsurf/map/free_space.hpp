@@ -58,6 +58,15 @@ public:
     CarvingStats carve(VoxelGrid& grid, std::span<const Eigen::Vector3d> points, std::span<const VoxelGrid::Hit> hits,
                        const Eigen::Vector3d& viewpoint);
 
+    /// Counts `scans` scans that reach none of the grid's voxels (none of their returns, and
+    /// so no ray, comes within their range of one): what carve() would do with them, without the
+    /// range image. A part of a map fused alone (map/tiles.hpp) keeps the drive's scan count,
+    /// which staleness is measured in, and drops the young voxels such a scan leaves behind.
+    void skip(std::uint32_t scans = 1) {
+        scan_ += scans;
+        if (scans > 0) young_.clear();
+    }
+
     /// Scans counted so far.
     std::uint32_t scans() const { return scan_; }
     std::size_t memory_bytes() const {

@@ -1,0 +1,139 @@
+#pragma once
+// A map fused in square tiles (docs/method.md, "Tiles"): each tile is fused alone, from the scans
+// that can reach what it depends on, and meshed alone; the tiles' meshes together are the mesh
+// of the map fused whole. Memory follows a tile, not the map; tiles can run one after the other
+// (`fuse --tile-size`) or on many machines (the Python module's fuse_tiles, on Dask).
+//
+// Why a tile's mesh is the whole map's, cube for cube:
+//  - every cube belongs to one tile, the one holding its centre (x-y, world frame);
+//  - a cube's triangles depend on the values of its corners, which depend on the voxels within
+//    max_reach() of them, and on the surface search reaching it: the tile searches its own cubes
+//    and `halo_cubes` beyond them. The tile's dependency box (its own cubes, the halo and the
+//    reach) holds the statistics of every point of every scan falling in it;
+//  - free-space carving removes a voxel by the rays passing through it: a tile integrates every
+//    point within the dependency box plus the sequence's longest ray (the planes of the voxels
+//    the rays return in are looked up), and carves with every scan whose returns come within its
+//    range of that box, whole. The other scans are counted (staleness is counted in scans);
+//  - every tile takes the whole map's lattice origin, so the statistics agree to the last bit.
+// A voxel beyond the crop that carving would have removed, and whose plane a ray returning in it
+// would have read, is the one thing a tile cannot see; tests/map/test_tiles.cpp compares the
+// tiles with the whole map on drives crossing several tiles.
+#include <array>
+#include <compare>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "lidarsurf/mesh/mesh.hpp"
+#include "lidarsurf/surface/config.hpp"
+
+namespace lidarsurf {
+
+struct ReconstructionSummary;
+
+struct TileConfig {
+    double tile_size = 100.0;  ///< metres: the side of the square tiles, in the world's x-y plane
+    int halo_cubes = 32;       ///< the surface search of a tile reaches this many cubes beyond it
+    /// Throws InvalidArgument naming the field: tile_size finite and >= 1 m, halo_cubes in [8, 1024].
+    void validate() const;
+};
+
+/// What a plan needs of one scan: where it was seen from, how far its returns reach, where its
+/// points are (world frame).
+struct ScanReach {
+    Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+    double radius = 0;                         ///< metres from the viewpoint to its farthest finite return
+    Eigen::AlignedBox3d box;                   ///< its finite points (empty: none)
+    std::optional<Eigen::Vector3d> first_point;  ///< its first finite point: a map's lattice origin comes from it
+};
+/// The reach of the scan `points` (world) seen from `viewpoint`.
+ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
+
+struct TileKey {
+    int x = 0, y = 0;  ///< the tile covers [x, x + 1) tile_size by [y, y + 1) tile_size (world metres)
+    auto operator<=>(const TileKey&) const = default;
+};
+
+/// Which tiles a sequence's map has and which scans each one takes.
+class TilePlan {
+public:
+    /// `scans`: every scan of the sequence, in fusion order. Throws InvalidArgument for a bad
+    /// config and InvalidInput when no scan has a finite point.
+    TilePlan(std::vector<ScanReach> scans, const ReconstructionConfig& config, const TileConfig& tiles);
+
+    /// The tiles that can own a triangle: those within reach of a point, in (y, x) order.
+    const std::vector<TileKey>& tiles() const { return tiles_; }
+    /// The tile whose square holds `world` (x-y).
+    TileKey tile_of(const Eigen::Vector3d& world) const;
+    /// Whether scan `scan` must be integrated into `tile` (else it is counted only).
+    bool reaches(const TileKey& tile, std::size_t scan) const;
+    /// How many scans `tile` integrates.
+    std::size_t scans_of(const TileKey& tile) const;
+    /// The tile's square (z unbounded); the box its cubes depend on; the box of the points it keeps.
+    Eigen::AlignedBox3d square(const TileKey& tile) const;
+    Eigen::AlignedBox3d dependency(const TileKey& tile) const;
+    Eigen::AlignedBox3d crop(const TileKey& tile) const;
+
+    /// The whole map's lattice origin (the first finite point of the first scan that has one).
+    const Eigen::Vector3d& grid_origin() const { return origin_; }
+    /// Where the first scan was seen from (orients what has no viewpoint).
+    const Eigen::Vector3d& sensor() const { return scans_.front().viewpoint; }
+    /// Where scan `scan` was seen from.
+    const Eigen::Vector3d& viewpoint(std::size_t scan) const { return scans_.at(scan).viewpoint; }
+    /// The sequence's longest ray, metres: how far beyond the dependency box a tile keeps points.
+    double ray_reach() const { return ray_reach_; }
+    /// The box of every scan's points.
+    const Eigen::AlignedBox3d& bounds() const { return bounds_; }
+    std::size_t scan_count() const { return scans_.size(); }
+    const ReconstructionConfig& config() const { return config_; }
+    const TileConfig& tile_config() const { return tile_config_; }
+
+private:
+    std::vector<ScanReach> scans_;
+    ReconstructionConfig config_;
+    TileConfig tile_config_;
+    Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
+    double ray_reach_ = 0;
+    double dependency_margin_ = 0;  // metres around the square
+    Eigen::AlignedBox3d bounds_;
+    std::vector<TileKey> tiles_;
+};
+
+/// Fuses and meshes one tile of `plan`: scans in order, `scan(i)` giving scan i's points in the
+/// world frame (read by the caller: files, memory), each integrated (the points within the
+/// tile's crop) or counted (TilePlan::reaches); then the mesh of the cubes the tile owns, in the
+/// world frame. `summary`, when given, gets the tile's counts and times.
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
+               ReconstructionSummary* summary = nullptr);
+
+/// Joins tile meshes written one after the other into one mesh: a vertex on a tile's border that
+/// an earlier tile wrote (the same position and attributes, to the bit) is not written again.
+class SeamWelder {
+public:
+    explicit SeamWelder(const TilePlan& plan) : plan_(&plan) {}
+    /// For each vertex of `part` (a mesh of `tile`): the index an earlier part wrote it with, or -1
+    /// (new). The new vertices are taken to be written next, in order, from index `written`.
+    std::vector<std::int64_t> weld(const TileKey& tile, const Mesh& part, std::uint64_t written);
+    /// Border vertices remembered.
+    std::size_t size() const { return seam_.size(); }
+
+private:
+    struct Key {
+        std::array<std::uint64_t, 3> position;    // the coordinates' bits
+        std::array<std::uint32_t, 5> attributes;  // the normal's, the confidence's bits, the level
+        bool operator==(const Key&) const = default;
+    };
+    struct KeyHash {
+        std::size_t operator()(const Key& k) const noexcept;
+    };
+    const TilePlan* plan_;
+    std::unordered_map<Key, std::uint64_t, KeyHash> seam_;
+};
+
+}  // namespace lidarsurf

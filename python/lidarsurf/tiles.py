@@ -1,0 +1,174 @@
+"""A map fused in tiles on Dask distributed: lidarsurf.fuse_tiles, and its command line
+
+    python3 -m lidarsurf.tiles SEQUENCE OUT_DIR --tile-size 100 --scheduler tcp://HOST:8786
+
+Each tile is fused from the scans that reach it and meshed alone, one task per tile; together the
+tiles' meshes are the mesh `lidarsurf fuse` writes for the whole map (docs/method.md, "Tiles").
+"""
+import argparse
+import contextlib
+import copy
+import json
+import os
+import re
+import sys
+
+import numpy as np
+
+from . import _lidarsurf as _ls
+
+__all__ = ["fuse_tiles", "TileResult"]
+
+_FRAME = re.compile(r"^\d{6}\.bin$")
+_TEMPORARY = re.compile(r"^tile_-?\d+_-?\d+\.ply\.tmp\.\d+\.\d+$")
+
+
+class TileResult(tuple):
+    """(paths, index): the tile meshes written, and the JSON index describing them."""
+    __slots__ = ()
+
+    def __new__(cls, paths, index):
+        return super().__new__(cls, (paths, index))
+
+    paths = property(lambda self: self[0], doc="The tile meshes (.ply), in the index's order.")
+    index = property(lambda self: self[1], doc="The index file: the plan and, per tile, its key, path and counts.")
+
+
+def _frames(sequence, first, frames, step):
+    velodyne = os.path.join(sequence, "velodyne")
+    if not os.path.isdir(velodyne):
+        raise FileNotFoundError(f"{sequence}: no velodyne/ directory (KITTI layout: velodyne/NNNNNN.bin and poses.txt)")
+    count = sum(1 for f in os.listdir(velodyne) if _FRAME.match(f))
+    indices = list(range(first, count, step))
+    return indices[:frames] if frames else indices
+
+
+# The tasks: Python functions, which Dask sends by name (the extension's functions do not pickle).
+def _reaches(sequence, frames):
+    return _ls.sequence_reaches(sequence, frames)
+
+
+def _tile(sequence, frames, reaches, config, tiles, key, path):
+    return _ls.fuse_tile(sequence, frames, reaches, config, tiles, tuple(key), path)
+
+
+@contextlib.contextmanager
+def _local_client():
+    """A LocalCluster of one single-threaded worker process per core, and its client."""
+    import dask
+    from distributed import Client, LocalCluster
+    # Dask starts workers with MALLOC_TRIM_THRESHOLD_ set, which also fixes glibc's mmap threshold
+    # at 128 KiB: every large buffer is then mapped and unmapped afresh, and a tile takes 2.7 times
+    # as long. A 64 MiB mmap threshold restores the speed (docs/tiles.md). Kept while the cluster
+    # lives: the nanny restarts a dead worker with it.
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    environ.setdefault("MALLOC_MMAP_THRESHOLD_", 64 << 20)
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+        with LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+            with Client(cluster) as client:
+                yield client
+
+
+def _write_json(path, data):
+    temporary = f"{path}.tmp.{os.getpid()}"
+    with open(temporary, "w") as f:
+        json.dump(data, f, indent=1)
+        f.write("\n")
+    os.replace(temporary, path)
+
+
+def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, halo_cubes=32, first=0, frames=0, step=1,
+               plan_chunk=100, retries=2):
+    """Fuse a sequence (KITTI layout, poses as `lidarsurf fuse` finds them) into a map cut in square
+    tiles of `tile_size` metres, each tile a task on the dask.distributed `client` (a LocalCluster of
+    this machine's cores when None), and write one mesh per tile, out_dir/tile_X_Y.ply, and
+    out_dir/index.json. Returns TileResult(paths, index).
+
+    Together the tiles' meshes are the whole map's (`lidarsurf fuse` without tiles): each triangle in
+    exactly one tile, the one whose square holds its cube. A tile reads the scans that reach it from
+    the sequence directory, which every worker must see at the same path (a shared file system).
+    Reading every scan once for the plan is spread over the workers too, `plan_chunk` scans a task.
+    A task whose worker dies is run again (up to `retries` times); a mesh is written whole or not at
+    all, and what a killed worker left half-written is removed.
+    """
+    config = config if config is not None else _ls.Config()
+    tiles = _ls.TileConfig(tile_size, halo_cubes)
+    config.validate()
+    indices = _frames(sequence, first, frames, step)
+    if not indices:
+        raise ValueError(f"{sequence}: no scan to fuse")
+    with contextlib.ExitStack() as stack:
+        if client is None:
+            client = stack.enter_context(_local_client())
+            if config.threads == 0:  # one tile a core, not every core for each tile
+                config = copy.copy(config)  # by its fields (lidarsurf/__init__.py)
+                config.threads = 1
+        chunks = [indices[i:i + plan_chunk] for i in range(0, len(indices), plan_chunk)]
+        parts = client.gather(client.map(_reaches, [sequence] * len(chunks), chunks, retries=retries, pure=False))
+        reaches = np.concatenate(parts)
+        plan = _ls.TilePlan(reaches, config, tiles)
+        os.makedirs(out_dir, exist_ok=True)
+        shared = client.scatter(reaches, broadcast=True)
+        keys = plan.tiles
+        paths = [os.path.join(out_dir, f"tile_{x}_{y}.ply") for x, y in keys]
+        futures = [client.submit(_tile, sequence, indices, shared, config, tiles, key, path, retries=retries, pure=False)
+                   for key, path in zip(keys, paths)]
+        counts = client.gather(futures)
+    for name in os.listdir(out_dir):  # what a killed worker was writing
+        if _TEMPORARY.match(name):
+            os.remove(os.path.join(out_dir, name))
+    written = []
+    entries = []
+    for key, path, c in zip(keys, paths, counts):
+        if c["triangles"] == 0:
+            continue
+        written.append(path)
+        entries.append({"tile": list(key), "path": os.path.basename(path), "scans": plan.scans_of(key), **c})
+    index = os.path.join(out_dir, "index.json")
+    _write_json(index, {
+        "sequence": os.path.abspath(sequence),
+        "frames": len(indices),
+        "tile_size": tiles.tile_size,
+        "halo_cubes": tiles.halo_cubes,
+        "grid_origin": plan.grid_origin,
+        "ray_reach": plan.ray_reach,
+        "config": repr(config),
+        "triangles": sum(e["triangles"] for e in entries),
+        "tiles": entries,
+    })
+    return TileResult(written, index)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="python3 -m lidarsurf.tiles",
+                                description="Fuse a sequence into a map cut in tiles, one Dask task per tile.")
+    p.add_argument("sequence", help="sequence directory (KITTI layout: velodyne/NNNNNN.bin, poses.txt)")
+    p.add_argument("out_dir", help="where the tiles' meshes (tile_X_Y.ply) and index.json go")
+    p.add_argument("--tile-size", type=float, default=100.0, help="side of the square tiles, metres (default 100)")
+    p.add_argument("--tile-halo-cubes", type=int, default=32, help="cubes a tile's surface search reaches beyond it")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://HOST:8786 (default: a local cluster)")
+    p.add_argument("--first", type=int, default=0)
+    p.add_argument("--frames", type=int, default=0, help="frames to fuse (0: to the last)")
+    p.add_argument("--step", type=int, default=1)
+    a = p.parse_args(argv)
+    client = None
+    if a.scheduler:
+        from distributed import Client
+        client = Client(a.scheduler)
+    try:
+        result = fuse_tiles(a.sequence, a.out_dir, a.tile_size, client=client, halo_cubes=a.tile_halo_cubes, first=a.first,
+                            frames=a.frames, step=a.step)
+    except (ValueError, OSError, MemoryError) as e:
+        print(f"lidarsurf.tiles: {e}", file=sys.stderr)
+        return 2
+    finally:
+        if client is not None:
+            client.close()
+    with open(result.index) as f:
+        total = json.load(f)["triangles"]
+    print(f"{len(result.paths)} tiles, {total} triangles -> {result.index}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,175 @@
+// Bindings of map/tiles.hpp: a map fused in tiles, the pieces lidarsurf.fuse_tiles (tiles.py)
+// hands to Dask workers. The plan travels as an array of scan reaches (picklable), not as an object.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <sstream>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/io/kitti_sequence.hpp"
+#include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/pipeline.hpp"
+
+namespace py = pybind11;
+
+namespace lidarsurf {
+namespace {
+
+// One row per scan: viewpoint (3), radius, box min (3), box max (3), has a first point, first point (3).
+constexpr py::ssize_t kReachColumns = 14;
+
+// The sequence's scans `frames` in the world frame (poses as `lidarsurf fuse` finds them).
+struct Sequence {
+    KittiSequence seq;
+    std::vector<Eigen::Isometry3d> poses;
+    std::vector<std::size_t> frames;
+
+    Sequence(const std::string& dir, std::vector<std::size_t> f) : seq{dir}, frames(std::move(f)) {
+        const std::size_t available = seq.frame_count();
+        poses = read_sequence_poses(find_sequence_poses(seq.dir, {}, {}));
+        for (std::size_t i : frames)
+            if (i >= available || i >= poses.size())
+                throw InvalidArgument(dir + ": frame " + std::to_string(i) + " has no scan or no pose (" + std::to_string(available) +
+                                      " scans, " + std::to_string(poses.size()) + " poses)");
+    }
+    std::vector<Eigen::Vector3d> scan(std::size_t n) const {
+        PointCloud cloud = read_points(seq.scan(frames[n]), {});
+        for (Eigen::Vector3d& p : cloud.points) p = poses[frames[n]] * p;
+        return std::move(cloud.points);
+    }
+    Eigen::Vector3d viewpoint(std::size_t n) const { return poses[frames[n]].translation(); }
+};
+
+py::array_t<double> reaches_array(const std::vector<ScanReach>& reaches) {
+    py::array_t<double> out({static_cast<py::ssize_t>(reaches.size()), kReachColumns});
+    auto a = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < reaches.size(); ++i) {
+        const ScanReach& r = reaches[i];
+        const auto row = static_cast<py::ssize_t>(i);
+        const Eigen::Vector3d lo = r.box.isEmpty() ? Eigen::Vector3d::Zero() : r.box.min();
+        const Eigen::Vector3d hi = r.box.isEmpty() ? Eigen::Vector3d::Zero() : r.box.max();
+        const Eigen::Vector3d first = r.first_point.value_or(Eigen::Vector3d::Zero());
+        const double v[kReachColumns] = {r.viewpoint.x(), r.viewpoint.y(), r.viewpoint.z(), r.radius, lo.x(), lo.y(), lo.z(), hi.x(), hi.y(),
+                                         hi.z(), r.first_point ? 1.0 : 0.0, first.x(), first.y(), first.z()};
+        for (py::ssize_t c = 0; c < kReachColumns; ++c) a(row, c) = v[c];
+    }
+    return out;
+}
+
+std::vector<ScanReach> reaches_from(const py::array_t<double, py::array::c_style | py::array::forcecast>& array) {
+    if (array.ndim() != 2 || array.shape(1) != kReachColumns)
+        throw InvalidArgument("scan reaches must be an (N, " + std::to_string(kReachColumns) + ") array (sequence_reaches())");
+    const auto a = array.unchecked<2>();
+    std::vector<ScanReach> out(static_cast<std::size_t>(array.shape(0)));
+    for (py::ssize_t i = 0; i < array.shape(0); ++i) {
+        ScanReach& r = out[static_cast<std::size_t>(i)];
+        r.viewpoint = {a(i, 0), a(i, 1), a(i, 2)};
+        r.radius = a(i, 3);
+        if (a(i, 10) != 0) {
+            r.box = Eigen::AlignedBox3d(Eigen::Vector3d(a(i, 4), a(i, 5), a(i, 6)), Eigen::Vector3d(a(i, 7), a(i, 8), a(i, 9)));
+            r.first_point = Eigen::Vector3d(a(i, 11), a(i, 12), a(i, 13));
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+void bind_tiles(py::module_& m) {
+    py::class_<TileConfig>(m, "TileConfig",
+                           "How a map is cut into tiles (fuse_tiles, `lidarsurf fuse --tile-size`): square tiles of tile_size metres in "
+                           "the world's x-y plane, each searched halo_cubes cubes beyond its edge.")
+        .def(py::init([](double tile_size, int halo_cubes) {
+                 TileConfig c{tile_size, halo_cubes};
+                 c.validate();
+                 return c;
+             }),
+             py::arg("tile_size") = TileConfig{}.tile_size, py::arg("halo_cubes") = TileConfig{}.halo_cubes,
+             "Raises ValueError on a bad value.")
+        .def_readwrite("tile_size", &TileConfig::tile_size, "Side of the square tiles, metres (CLI --tile-size).")
+        .def_readwrite("halo_cubes", &TileConfig::halo_cubes, "Cubes the surface search of a tile reaches beyond it (CLI --tile-halo-cubes).")
+        .def("validate", &TileConfig::validate, "Raise ValueError naming the bad field.")
+        .def(py::pickle([](const TileConfig& c) { return py::make_tuple(c.tile_size, c.halo_cubes); },
+                        [](const py::tuple& t) {
+                            TileConfig c{t[0].cast<double>(), t[1].cast<int>()};
+                            c.validate();
+                            return c;
+                        }))
+        .def("__repr__", [](const TileConfig& c) {
+            std::ostringstream o;
+            o << "TileConfig(tile_size=" << c.tile_size << ", halo_cubes=" << c.halo_cubes << ")";
+            return o.str();
+        });
+
+    m.def(
+        "sequence_reaches",
+        [](const std::string& sequence, const std::vector<std::size_t>& frames) {
+            std::vector<ScanReach> reaches;
+            {
+                py::gil_scoped_release release;
+                const Sequence s(sequence, frames);
+                for (std::size_t n = 0; n < frames.size(); ++n) reaches.push_back(scan_reach(s.scan(n), s.viewpoint(n)));
+            }
+            return reaches_array(reaches);
+        },
+        py::arg("sequence"), py::arg("frames"),
+        "The reach of each scan `frames` of a sequence (KITTI layout, poses as `lidarsurf fuse` finds them): an (N, 14) "
+        "array, one row per scan (viewpoint, farthest return, box of its points, its first point), what a TilePlan is made "
+        "of. Reading a sequence's scans once, in pieces on many workers if it is long.");
+
+    py::class_<TilePlan>(m, "TilePlan",
+                         "Which tiles a sequence's map has and which scans each takes (map/tiles.hpp), from the scans' reaches "
+                         "(sequence_reaches), a Config and a TileConfig.")
+        .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& reaches, const ReconstructionConfig& config,
+                         const TileConfig& tiles) { return TilePlan(reaches_from(reaches), config, tiles); }),
+             py::arg("reaches"), py::arg("config"), py::arg("tiles"),
+             "Raises ValueError for a bad config (the paper as written, min_component_triangles) or a sequence without a point.")
+        .def_property_readonly(
+            "tiles", [](const TilePlan& p) {
+                std::vector<std::pair<int, int>> out;
+                for (const TileKey& t : p.tiles()) out.emplace_back(t.x, t.y);
+                return out;
+            },
+            "The tiles that can own a triangle, as (x, y) keys: tile (x, y) covers [x, x + 1) * tile_size by [y, y + 1) * tile_size.")
+        .def(
+            "scans_of", [](const TilePlan& p, std::pair<int, int> t) { return p.scans_of({t.first, t.second}); }, py::arg("tile"),
+            "How many scans the tile integrates (the others it counts only).")
+        .def_property_readonly("ray_reach", &TilePlan::ray_reach, "The sequence's longest ray, metres: how far beyond its own a tile keeps points.")
+        .def_property_readonly(
+            "grid_origin", [](const TilePlan& p) { return std::vector<double>{p.grid_origin().x(), p.grid_origin().y(), p.grid_origin().z()}; },
+            "The whole map's lattice origin, which every tile takes.");
+
+    m.def(
+        "fuse_tile",
+        [](const std::string& sequence, const std::vector<std::size_t>& frames, const py::array_t<double, py::array::c_style | py::array::forcecast>& reaches,
+           const ReconstructionConfig& config, const TileConfig& tiles, std::pair<int, int> tile, const std::string& output) {
+            std::vector<ScanReach> r = reaches_from(reaches);
+            py::dict out;
+            ReconstructionSummary s;
+            std::size_t triangles = 0, vertices = 0;
+            {
+                py::gil_scoped_release release;
+                const TilePlan plan(std::move(r), config, tiles);
+                if (plan.scan_count() != frames.size()) throw InvalidArgument("fuse_tile: one reach per frame");
+                const Sequence seq(sequence, frames);
+                const Mesh mesh = fuse_tile(plan, {tile.first, tile.second}, [&](std::size_t n) { return seq.scan(n); }, &s);
+                triangles = mesh.triangles.size(), vertices = mesh.vertices.size();
+                if (!output.empty() && triangles > 0) write_mesh(mesh, output);
+            }
+            out["triangles"] = triangles;
+            out["vertices"] = vertices;
+            out["voxels"] = s.voxels;
+            out["carved_voxels"] = s.carved_voxels;
+            out["seconds"] = s.seconds_insert + s.seconds_carve + s.seconds_tsdf + s.seconds_mesh;
+            return out;
+        },
+        py::arg("sequence"), py::arg("frames"), py::arg("reaches"), py::arg("config"), py::arg("tiles"), py::arg("tile"), py::arg("output"),
+        "Fuse and mesh one tile of a sequence's map and write its mesh to `output` atomically (whole or not at all; "
+        "nothing for a tile without a triangle): the "
+        "task fuse_tiles gives a worker. Returns a dict of counts (triangles, vertices, voxels, carved_voxels) and seconds.");
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,103 @@
+"""lidarsurf.fuse_tiles on a dask.distributed LocalCluster of 2 workers: the tiles' meshes together
+are the mesh `lidarsurf fuse` writes for the whole map (the oracle), and a worker killed while it
+meshes a tile changes nothing of the result."""
+import json
+import os
+import pickle
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import lidarsurf
+
+distributed = pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module")
+def drive(cli, tmp_path_factory):
+    d = tmp_path_factory.mktemp("tiles")
+    seq = d / "drive"
+    subprocess.run([cli, "simulate", "--scene", "town", "--frames", "8", "--length", "120", "--gt-beams", "0", "-o", str(seq), "-q"],
+                   check=True)
+    whole = d / "whole.ply"
+    subprocess.run([cli, "fuse", str(seq), "-o", str(whole), "-q"], check=True)
+    return seq, lidarsurf.read_mesh(str(whole))
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def test_the_tiles_are_the_whole_map(drive, client, tmp_path, triangle_rows):
+    seq, whole = drive
+    result = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "tiles"), tile_size=30, client=client)
+    assert len(result.paths) >= 4, "the drive crosses several tiles"
+    tiles = sorted(row for p in result.paths for row in triangle_rows(lidarsurf.read_mesh(p)))
+    assert tiles == triangle_rows(whole), "each triangle of the whole map in exactly one tile"
+
+    with open(result.index) as f:
+        index = json.load(f)
+    assert index["triangles"] == len(whole.triangles) and len(index["tiles"]) == len(result.paths)
+    assert sorted(os.listdir(tmp_path / "tiles")) == sorted([os.path.basename(p) for p in result.paths] + ["index.json"])
+
+
+def test_a_worker_killed_mid_tile_changes_nothing(drive, client, tmp_path):
+    seq, whole = drive
+    calm = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "calm"), tile_size=30, client=client)
+    before = set(client.scheduler_info()["workers"])
+    killed = []
+
+    def kill_one_busy_worker():
+        deadline = time.time() + 60
+        while time.time() < deadline and not killed:
+            for worker, keys in client.processing().items():
+                if any(str(k).startswith("_tile") for k in keys):
+                    pid = client.run(os.getpid, workers=[worker])[worker]
+                    os.kill(pid, signal.SIGKILL)
+                    killed.append(worker)
+                    return
+            time.sleep(0.02)
+
+    killer = threading.Thread(target=kill_one_busy_worker)
+    killer.start()
+    result = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "killed"), tile_size=30, client=client)
+    killer.join()
+    assert killed, "a worker was killed while it meshed a tile"
+    client.wait_for_workers(2, timeout=60)
+    assert set(client.scheduler_info()["workers"]) != before, "the nanny started a new worker"
+    assert [os.path.basename(p) for p in result.paths] == [os.path.basename(p) for p in calm.paths]
+    for a, b in zip(result.paths, calm.paths):
+        with open(a, "rb") as fa, open(b, "rb") as fb:
+            assert fa.read() == fb.read(), f"{a}: the same mesh as without the kill"
+    # Nothing half-written stays: the tiles' meshes and the index only.
+    assert sorted(os.listdir(tmp_path / "killed")) == sorted([os.path.basename(p) for p in result.paths] + ["index.json"])
+
+
+def test_configs_travel_and_bad_plans_are_refused(tmp_path):
+    c = lidarsurf.Config()
+    c.carve_stale_scans = 9
+    c.mode = "an"
+    back = pickle.loads(pickle.dumps(c))
+    assert repr(back) == repr(c)
+    t = pickle.loads(pickle.dumps(lidarsurf.TileConfig(tile_size=50, halo_cubes=16)))
+    assert (t.tile_size, t.halo_cubes) == (50, 16)
+    with pytest.raises(ValueError, match="tile_size"):
+        lidarsurf.TileConfig(tile_size=0.1)
+    with pytest.raises(ValueError, match="halo_cubes"):
+        lidarsurf.TileConfig(halo_cubes=1)
+    reaches = np.zeros((1, 14))
+    with pytest.raises(ValueError, match="no finite point"):
+        lidarsurf.TilePlan(reaches, lidarsurf.Config(), lidarsurf.TileConfig())
+    with pytest.raises(ValueError, match="paper"):
+        lidarsurf.TilePlan(reaches, lidarsurf.Config.paper(), lidarsurf.TileConfig())
+    with pytest.raises(FileNotFoundError):
+        lidarsurf.fuse_tiles(str(tmp_path / "nowhere"), str(tmp_path / "out"), client=object())

@@ -1,0 +1,194 @@
+#include "lidarsurf/map/tiles.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/format_value.hpp"
+#include "lidarsurf/pipeline.hpp"
+#include "lidarsurf/surface/seeded_surface.hpp"
+
+namespace lidarsurf {
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+using Map = BlockMap<std::int32_t>;
+
+// The x-y distance from `p` to the box (0 inside).
+double distance_xy(const Eigen::Vector3d& p, const Eigen::AlignedBox3d& box) {
+    const double dx = std::max({box.min().x() - p.x(), 0.0, p.x() - box.max().x()});
+    const double dy = std::max({box.min().y() - p.y(), 0.0, p.y() - box.max().y()});
+    return std::hypot(dx, dy);
+}
+
+Eigen::AlignedBox3d grown_xy(const Eigen::AlignedBox3d& box, double margin) {
+    return {Eigen::Vector3d(box.min().x() - margin, box.min().y() - margin, -kInf),
+            Eigen::Vector3d(box.max().x() + margin, box.max().y() + margin, kInf)};
+}
+}  // namespace
+
+void TileConfig::validate() const {
+    if (!std::isfinite(tile_size) || tile_size < 1.0) throw InvalidArgument("tile_size must be finite and >= 1 m, got " + format_value(tile_size));
+    if (halo_cubes < 8 || halo_cubes > 1024) throw InvalidArgument("halo_cubes must be in [8, 1024], got " + std::to_string(halo_cubes));
+}
+
+ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint) {
+    if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
+    ScanReach r;
+    r.viewpoint = viewpoint;
+    double r2 = 0;
+    for (const Eigen::Vector3d& p : points) {
+        if (!p.allFinite()) continue;
+        if (!r.first_point) r.first_point = p;
+        r.box.extend(p);
+        r2 = std::max(r2, (p - viewpoint).squaredNorm());
+    }
+    r.radius = std::sqrt(r2);
+    return r;
+}
+
+TilePlan::TilePlan(std::vector<ScanReach> scans, const ReconstructionConfig& config, const TileConfig& tiles)
+    : scans_(std::move(scans)), config_(config), tile_config_(tiles) {
+    config_.validate();
+    tile_config_.validate();
+    if (!config_.seeded_surface) throw InvalidArgument("tiles mesh with the seeded surface (not the paper as written)");
+    if (config_.min_component_triangles > 0) throw InvalidArgument("min_component_triangles filters the whole map's components: not with tiles");
+    const auto first = std::find_if(scans_.begin(), scans_.end(), [](const ScanReach& s) { return s.first_point.has_value(); });
+    if (first == scans_.end()) throw InvalidInput("the sequence has no finite point");
+    origin_ = *first->first_point;
+    const double alpha = config_.voxel_size;
+    for (const ScanReach& s : scans_) {
+        if (!s.viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
+        ray_reach_ = std::max(ray_reach_, s.radius);
+        if (!s.box.isEmpty()) bounds_.extend(s.box);
+    }
+    // A cube in the square depends on the vertices within the search halo, each on the voxels
+    // within max_reach; one block more for the blocks that straddle the square's edge.
+    dependency_margin_ = alpha * (tile_config_.halo_cubes + config_.max_reach() + 2 * Map::kSize);
+    // The tiles within reach of a point: a vertex is defined within max_reach of a voxel.
+    std::set<TileKey> keys;
+    const double near = alpha * (config_.max_reach() + 2);
+    for (const ScanReach& s : scans_) {
+        if (s.box.isEmpty()) continue;
+        const TileKey lo = tile_of(s.box.min() - Eigen::Vector3d::Constant(near));
+        const TileKey hi = tile_of(s.box.max() + Eigen::Vector3d::Constant(near));
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x) keys.insert({x, y});
+    }
+    tiles_.assign(keys.begin(), keys.end());
+    std::sort(tiles_.begin(), tiles_.end(), [](const TileKey& a, const TileKey& b) { return std::tie(a.y, a.x) < std::tie(b.y, b.x); });
+}
+
+TileKey TilePlan::tile_of(const Eigen::Vector3d& world) const {
+    const double s = tile_config_.tile_size;
+    return {static_cast<int>(std::floor(world.x() / s)), static_cast<int>(std::floor(world.y() / s))};
+}
+
+Eigen::AlignedBox3d TilePlan::square(const TileKey& t) const {
+    const double s = tile_config_.tile_size;
+    return {Eigen::Vector3d(t.x * s, t.y * s, -kInf), Eigen::Vector3d((t.x + 1) * s, (t.y + 1) * s, kInf)};
+}
+
+Eigen::AlignedBox3d TilePlan::dependency(const TileKey& t) const { return grown_xy(square(t), dependency_margin_); }
+
+Eigen::AlignedBox3d TilePlan::crop(const TileKey& t) const {
+    // The planes of the voxels that the rays through the dependency box return in; a voxel more.
+    return grown_xy(dependency(t), ray_reach_ + 2 * config_.voxel_size);
+}
+
+bool TilePlan::reaches(const TileKey& t, std::size_t scan) const {
+    const ScanReach& s = scans_.at(scan);
+    if (s.box.isEmpty()) return false;
+    // No return beyond the radius: no voxel farther than it (and a voxel) is passed or hit, and
+    // the young voxels it would keep are within it. A metre for rounding (the carver's floats).
+    return distance_xy(s.viewpoint, crop(t)) <= s.radius + 2 * config_.voxel_size + 1.0;
+}
+
+std::size_t TilePlan::scans_of(const TileKey& t) const {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < scans_.size(); ++i) n += reaches(t, i);
+    return n;
+}
+
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
+               ReconstructionSummary* summary) {
+    const ReconstructionConfig& config = plan.config();
+    Reconstructor rec(config, plan.sensor(), plan.grid_origin());
+    const Eigen::AlignedBox3d crop = plan.crop(tile);
+    for (std::size_t i = 0; i < plan.scan_count(); ++i) {
+        if (!plan.reaches(tile, i)) {
+            rec.skip_scan();
+            continue;
+        }
+        const std::vector<Eigen::Vector3d> points = scan(i);
+        rec.integrate(points, plan.viewpoint(i), crop);
+    }
+    Mesh mesh;
+    if (rec.grid().point_count() > 0) {
+        // The search: the blocks of cubes in the square that are within reach of a voxel, and the halo.
+        const VoxelGrid& grid = rec.grid();
+        const double alpha = config.voxel_size, block = alpha * Map::kSize;
+        const Eigen::AlignedBox3d sq = plan.square(tile);
+        const Eigen::Vector3d& o = grid.origin();
+        const int r = (config.max_reach() + 1 + Map::kSize - 1) / Map::kSize;
+        const auto block_lo = [&](double world, double org) { return static_cast<int>(std::floor((world - org) / block)); };
+        const int bx0 = block_lo(sq.min().x(), o.x()), bx1 = block_lo(sq.max().x(), o.x());
+        const int by0 = block_lo(sq.min().y(), o.y()), by1 = block_lo(sq.max().y(), o.y());
+        BlockIndex seen;
+        std::vector<VoxelKey> core;
+        for (const VoxelKey& b : grid.index().block_keys()) {
+            if (b.x() + r < bx0 || b.x() - r > bx1 || b.y() + r < by0 || b.y() - r > by1) continue;
+            for (int z = -r; z <= r; ++z)
+                for (int y = std::max(b.y() - r, by0); y <= std::min(b.y() + r, by1); ++y)
+                    for (int x = std::max(b.x() - r, bx0); x <= std::min(b.x() + r, bx1); ++x) {
+                        const VoxelKey k(x, y, b.z() + z);
+                        if (seen.try_emplace(k, 0).second) core.push_back(k);
+                    }
+        }
+        const SearchRegion region = SearchRegion::around(core, plan.tile_config().halo_cubes);
+        const auto owns = [&](const VoxelKey& cube) {
+            return plan.tile_of(o + alpha * (cube.cast<double>() + Eigen::Vector3d::Constant(0.5))) == tile;
+        };
+        mesh = rec.extract_mesh(region, owns);
+    }
+    if (summary) *summary = rec.summary();
+    return mesh;
+}
+
+std::size_t SeamWelder::KeyHash::operator()(const Key& k) const noexcept {
+    std::uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (std::uint64_t v : k.position) h = (h ^ v) * 0xff51afd7ed558ccdull, h ^= h >> 33;
+    for (std::uint32_t v : k.attributes) h = (h ^ v) * 0xc4ceb9fe1a85ec53ull, h ^= h >> 29;
+    return static_cast<std::size_t>(h);
+}
+
+std::vector<std::int64_t> SeamWelder::weld(const TileKey& tile, const Mesh& part, std::uint64_t written) {
+    // Only a vertex within a cube of the square's border can be shared with another tile.
+    const Eigen::AlignedBox3d sq = plan_->square(tile);
+    const double near = 1.5 * plan_->config().voxel_size;
+    std::vector<std::int64_t> out(part.vertices.size(), -1);
+    for (std::size_t i = 0; i < part.vertices.size(); ++i) {
+        const Eigen::Vector3d& v = part.vertices[i];
+        const bool border = v.x() - sq.min().x() < near || sq.max().x() - v.x() < near || v.y() - sq.min().y() < near ||
+                            sq.max().y() - v.y() < near;
+        if (!border) {
+            ++written;
+            continue;
+        }
+        Key key{};
+        for (int a = 0; a < 3; ++a) key.position[static_cast<std::size_t>(a)] = std::bit_cast<std::uint64_t>(v[a]);
+        if (!part.normals.empty())
+            for (int a = 0; a < 3; ++a) key.attributes[static_cast<std::size_t>(a)] = std::bit_cast<std::uint32_t>(part.normals[i][a]);
+        if (!part.confidence.empty()) key.attributes[3] = std::bit_cast<std::uint32_t>(part.confidence[i]);
+        if (!part.levels.empty()) key.attributes[4] = part.levels[i];
+        const auto [it, added] = seam_.try_emplace(key, written);
+        if (added) ++written;
+        else out[i] = static_cast<std::int64_t>(it->second);
+    }
+    return out;
+}
+
+}  // namespace lidarsurf

@@ -1,0 +1,146 @@
+// A map fused in tiles (map/tiles.hpp) against the same map fused whole (the oracle: one
+// Reconstructor over every scan): the tiles' triangles together are the whole map's, none lost
+// and none twice, each in the tile whose square holds its cube; the seams are welded; a tile
+// that a scan cannot reach counts it without its points.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/pipeline.hpp"
+#include "town_drive.hpp"
+
+using namespace lidarsurf;
+
+namespace {
+
+// A 180 m town drive there and back seen by a sensor of 40 m range: scans at one end do not reach
+// the tiles at the other, which the drive leaves and comes back to; a parked car leaves and
+// moving ones pass (carving removes them).
+const std::vector<test::Scan>& short_range_drive() {
+    static const std::vector<test::Scan> scans = [] {
+        sim::SceneConfig scene;
+        scene.length = 180;
+        scene.leaving_cars = 1;
+        sim::SimulatorConfig sc;
+        sc.frames = 9;
+        sc.gt_beams = 0;
+        sc.sensor.max_range = 40;
+        const sim::Simulator simulator(sim::make_world(scene), sc);
+        std::vector<test::Scan> out;
+        for (std::size_t i = 0; i < simulator.frame_count(); ++i) {
+            const sim::SimulatedFrame f = simulator.frame(i);
+            test::Scan s{{}, f.pose.translation(), f.pose};
+            for (const Eigen::Vector3d& p : f.scan.points) s.points.push_back(f.pose * p);
+            out.push_back(std::move(s));
+        }
+        for (std::size_t i = simulator.frame_count(); i-- > 0;) out.push_back(out[i]);  // back the same way
+        return out;
+    }();
+    return scans;
+}
+
+TilePlan plan_of(const std::vector<test::Scan>& drive, const ReconstructionConfig& config, const TileConfig& tiles) {
+    std::vector<ScanReach> reach;
+    for (const test::Scan& s : drive) reach.push_back(scan_reach(s.points, s.from));
+    return TilePlan(std::move(reach), config, tiles);
+}
+
+Mesh whole_map(const std::vector<test::Scan>& drive, const ReconstructionConfig& config) {
+    Reconstructor rec(config, drive.front().from);
+    for (const test::Scan& s : drive) rec.integrate(s.points, s.from);
+    return rec.extract_mesh();
+}
+
+// Every tile fused apart, the meshes welded one after the other (as a MeshStreamWriter writes them).
+struct Tiled {
+    Mesh mesh;
+    std::map<TileKey, Mesh> parts;
+};
+Tiled tiled_map(const TilePlan& plan, const std::vector<test::Scan>& drive) {
+    Tiled out;
+    SeamWelder welder(plan);
+    for (const TileKey& t : plan.tiles()) {
+        const Mesh part = fuse_tile(plan, t, [&](std::size_t i) { return drive[i].points; });
+        const std::vector<std::int64_t> existing = welder.weld(t, part, out.mesh.vertices.size());
+        std::vector<std::uint32_t> index(part.vertices.size());
+        for (std::size_t i = 0; i < part.vertices.size(); ++i) {
+            if (existing[i] >= 0) {
+                index[i] = static_cast<std::uint32_t>(existing[i]);
+                continue;
+            }
+            index[i] = static_cast<std::uint32_t>(out.mesh.vertices.size());
+            out.mesh.vertices.push_back(part.vertices[i]);
+            out.mesh.normals.push_back(part.normals[i]);
+            out.mesh.levels.push_back(part.levels[i]);
+            out.mesh.confidence.push_back(part.confidence[i]);
+        }
+        for (const auto& tri : part.triangles) out.mesh.triangles.push_back({index[tri[0]], index[tri[1]], index[tri[2]]});
+        out.parts[t] = part;
+    }
+    return out;
+}
+
+void expect_tiles_equal_the_whole_map(const std::vector<test::Scan>& drive, const TileConfig& tiles, std::size_t min_tiles,
+                                      const ReconstructionConfig& config = {}) {
+    const TilePlan plan = plan_of(drive, config, tiles);
+    ASSERT_GE(plan.tiles().size(), min_tiles);
+    const Mesh whole = whole_map(drive, config);
+    const Tiled tiled = tiled_map(plan, drive);
+    ASSERT_GT(whole.triangles.size(), 10000u);
+    EXPECT_EQ(tiled.mesh.triangles.size(), whole.triangles.size());
+    EXPECT_TRUE(test::triangles_of(tiled.mesh) == test::triangles_of(whole)) << "the same triangles, none lost, none twice";
+    EXPECT_EQ(tiled.mesh.vertices.size(), whole.vertices.size()) << "each vertex on a seam written once";
+    std::size_t with_triangles = 0;
+    for (const auto& [key, part] : tiled.parts) {
+        with_triangles += !part.triangles.empty();
+        const Eigen::AlignedBox3d square = plan.square(key);
+        for (const auto& tri : part.triangles) {
+            const Eigen::Vector3d c = (part.vertices[tri[0]] + part.vertices[tri[1]] + part.vertices[tri[2]]) / 3;
+            // A triangle lies in its cube: within a voxel of the tile's square.
+            EXPECT_LE(square.exteriorDistance(Eigen::Vector3d(c.x(), c.y(), 0)), config.voxel_size);
+        }
+    }
+    EXPECT_GE(with_triangles, min_tiles);
+}
+
+}  // namespace
+
+TEST(Tiles, TheTilesMeshIsTheWholeMapsMesh) {
+    TileConfig tiles;
+    tiles.tile_size = 30;
+    expect_tiles_equal_the_whole_map(test::town_drive(), tiles, 5);
+}
+
+TEST(Tiles, ScansThatCannotReachATileAreCountedNotIntegrated) {
+    TileConfig tiles;
+    tiles.tile_size = 25;
+    const std::vector<test::Scan>& drive = short_range_drive();
+    // Staleness within the drive: a tile counts the scans it skips, or the voxels it sees again on
+    // the way back would go stale late.
+    ReconstructionConfig config;
+    config.carve_stale_scans = 2;
+    const TilePlan plan = plan_of(drive, config, tiles);
+    // Tiles at the two ends of the drive take only some of its scans: the first, left and come back to.
+    std::size_t revisited = 0;
+    for (const TileKey& t : plan.tiles()) {
+        std::size_t runs = 0;
+        for (std::size_t i = 0; i < drive.size(); ++i) runs += plan.reaches(t, i) && (i == 0 || !plan.reaches(t, i - 1));
+        revisited += runs > 1;
+    }
+    EXPECT_GE(revisited, 2u);
+    expect_tiles_equal_the_whole_map(drive, tiles, 7, config);
+}
+
+TEST(Tiles, BadPlansAreRefused) {
+    for (const TileConfig& bad : {TileConfig{0.5, 32}, TileConfig{std::nan(""), 32}, TileConfig{100, 2}, TileConfig{100, 2000}})
+        EXPECT_THROW(bad.validate(), InvalidArgument);
+    ReconstructionConfig filtered;
+    filtered.min_component_triangles = 10;
+    const std::vector<Eigen::Vector3d> points = {{1, 2, 3}};
+    EXPECT_THROW(TilePlan({scan_reach(points, Eigen::Vector3d::Zero())}, filtered, TileConfig{}), InvalidArgument);
+    const std::vector<Eigen::Vector3d> nothing = {Eigen::Vector3d::Constant(std::nan(""))};
+    EXPECT_THROW(TilePlan({scan_reach(nothing, Eigen::Vector3d::Zero())}, ReconstructionConfig{}, TileConfig{}), InvalidInput);
+}
