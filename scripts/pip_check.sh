@@ -30,6 +30,7 @@ exec(open(sys.argv[2]).read())          # the README snippet, as written
 assert len(mesh.triangles) > 0
 for a in (mesh.vertices, mesh.triangles, mesh.normals, mesh.levels, mesh.confidence):
     assert not a.flags.writeable, "a mesh array is writable"
+assert callable(lidarsurf.fuse_tiles) and lidarsurf.TileConfig(tile_size=50).tile_size == 50  # tiles.py is in the package
 print("pip-check:", sys.argv[1], lidarsurf.__version__, mesh)
 '
 cd "$work"
