@@ -174,15 +174,16 @@ int run_fuse(const FuseOptions& o) {
     const Method m = resolve_method(o.reconstruct);
     if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
     if (live) LiveMesh::check(m.config);  // before any scan is read
+    if (o.tiles.tile_size != 0) {
+        if (live || o.remesh_every > 0) throw InvalidArgument("--tile-size meshes each tile once, at its end: not with --live, --serve or --remesh-every");
+        o.tiles.validate();
+        TilePlan::check(m.config);
+    }
     const MeshFormat requested = parse_mesh_format(o.mesh_format);
     FuseInput in = read_fuse_input(o);
     const MeshFormat format = mesh_format_for(o.output, requested);  // .stl: exit 2 now
     in.format = format;
-    if (o.tiles.tile_size != 0) {
-        if (live || o.remesh_every > 0) throw InvalidArgument("--tile-size meshes each tile once, at its end: not with --live, --serve or --remesh-every");
-        o.tiles.validate();
-        return run_fuse_tiles(o, m, in);
-    }
+    if (o.tiles.tile_size != 0) return run_fuse_tiles(o, m, in);
     std::FILE* const report = report_stream(o.output);
 
     Reconstructor rec(m.config, in.pose(0) * m.sensor);

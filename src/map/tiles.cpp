@@ -50,12 +50,16 @@ ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vecto
     return r;
 }
 
+void TilePlan::check(const ReconstructionConfig& config) {
+    config.validate();
+    if (!config.seeded_surface) throw InvalidArgument("tiles mesh with the seeded surface (not the paper as written)");
+    if (config.min_component_triangles > 0) throw InvalidArgument("min_component_triangles filters the whole map's components: not with tiles");
+}
+
 TilePlan::TilePlan(std::vector<ScanReach> scans, const ReconstructionConfig& config, const TileConfig& tiles)
     : scans_(std::move(scans)), config_(config), tile_config_(tiles) {
-    config_.validate();
+    check(config_);
     tile_config_.validate();
-    if (!config_.seeded_surface) throw InvalidArgument("tiles mesh with the seeded surface (not the paper as written)");
-    if (config_.min_component_triangles > 0) throw InvalidArgument("min_component_triangles filters the whole map's components: not with tiles");
     const auto first = std::find_if(scans_.begin(), scans_.end(), [](const ScanReach& s) { return s.first_point.has_value(); });
     if (first == scans_.end()) throw InvalidInput("the sequence has no finite point");
     origin_ = *first->first_point;

@@ -66,6 +66,9 @@ public:
     /// `scans`: every scan of the sequence, in fusion order. Throws InvalidArgument for a bad
     /// config and InvalidInput when no scan has a finite point.
     TilePlan(std::vector<ScanReach> scans, const ReconstructionConfig& config, const TileConfig& tiles);
+    /// The constructor's check of `config` alone (InvalidArgument), for a caller that refuses a
+    /// configuration before reading any scan.
+    static void check(const ReconstructionConfig& config);
 
     /// The tiles that can own a triangle: those within reach of a point, in (y, x) order.
     const std::vector<TileKey>& tiles() const { return tiles_; }
