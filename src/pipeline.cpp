@@ -151,26 +151,15 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     if (grid_.point_count() == 0)
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + format_value(summary_.points_read) + " dropped)");
-    const auto budget = static_cast<std::size_t>(budget_bytes());
     const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
-    summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) + (carver_ ? carver_->memory_bytes() : 0) +
-                               estimate_extraction_bytes(grid_, config, evaluation, budget);
-    if (summary_.memory_estimate > budget)
-        throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
-                                        format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
-                                            " blocks, max level " + format_value(config_.max_level())));
+    check_extraction_budget(config, evaluation);
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     Mesh mesh;
-    const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
+    const VertexPlacement placement = vertex_placement();
     arena.execute([&] {
         auto t0 = std::chrono::steady_clock::now();
         if (config.seeded_surface && evaluation == Evaluation::Fast) {
-            SeededTsdf seeded = compute_seeded_tsdf(grid_, config, sensor_, EigenSolver::ClosedForm, previous_ ? &*previous_ : nullptr);
-            summary_.seconds_tsdf = seconds_since(t0);
-            summary_.tsdf_phases = seeded.timing;
-            summary_.candidate_vertices = seeded.evaluated;
-            summary_.reused_vertices = seeded.reused;
-            summary_.defined_vertices = seeded.field.size();
+            SeededTsdf seeded = seeded_field(config, nullptr);
             t0 = std::chrono::steady_clock::now();
             mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, placement);
             // The next extraction redoes only what the points integrated from now on can reach.
@@ -218,32 +207,46 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
         throw InvalidArgument("min_component_triangles filters the whole map's components: not for a part of it");
     if (grid_.point_count() == 0) throw InvalidInput("the input has no points");
     const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
-    // The estimate covers every block the grid holds: an upper bound for a region of it.
-    const auto budget = static_cast<std::size_t>(budget_bytes());
-    summary_.memory_estimate = grid_.memory_bytes() + (carver_ ? carver_->memory_bytes() : 0) +
-                               estimate_extraction_bytes(grid_, config, Evaluation::Fast, budget);
-    if (summary_.memory_estimate > budget)
-        throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
-                                        format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) + " blocks"));
+    check_extraction_budget(config, Evaluation::Fast);  // the whole grid's: an upper bound for a region of it
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
-    const VertexPlacement placement = config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
     Mesh mesh;
     arena.execute([&] {
-        auto t0 = std::chrono::steady_clock::now();
-        SeededTsdf seeded = compute_seeded_tsdf(grid_, config, sensor_, EigenSolver::ClosedForm, nullptr, &region);
-        summary_.seconds_tsdf = seconds_since(t0);
-        summary_.tsdf_phases = seeded.timing;
-        summary_.candidate_vertices = seeded.evaluated;
-        summary_.reused_vertices = 0;
-        summary_.defined_vertices = seeded.field.size();
-        t0 = std::chrono::steady_clock::now();
+        SeededTsdf seeded = seeded_field(config, &region);
+        const auto t0 = std::chrono::steady_clock::now();
         std::erase_if(seeded.cubes, [&](const VoxelKey& cube) { return !owns(cube); });
-        mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, placement);
+        mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, vertex_placement());
         summary_.seconds_mesh = seconds_since(t0);
     });
     summary_.mesh_vertices = mesh.vertices.size();
     summary_.mesh_triangles = mesh.triangles.size();
     return mesh;
+}
+
+void Reconstructor::check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation) {
+    const auto budget = static_cast<std::size_t>(budget_bytes());
+    summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) + (carver_ ? carver_->memory_bytes() : 0) +
+                               estimate_extraction_bytes(grid_, config, evaluation, budget);
+    if (summary_.memory_estimate > budget)
+        throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
+                                        format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
+                                            " blocks, max level " + format_value(config_.max_level())));
+}
+
+SeededTsdf Reconstructor::seeded_field(const ReconstructionConfig& config, const SearchRegion* region) {
+    const auto t0 = std::chrono::steady_clock::now();
+    // A region search does not reuse the previous field (compute_seeded_tsdf).
+    const TsdfField* previous = region || !previous_ ? nullptr : &*previous_;
+    SeededTsdf seeded = compute_seeded_tsdf(grid_, config, sensor_, EigenSolver::ClosedForm, previous, region);
+    summary_.seconds_tsdf = seconds_since(t0);
+    summary_.tsdf_phases = seeded.timing;
+    summary_.candidate_vertices = seeded.evaluated;
+    summary_.reused_vertices = seeded.reused;
+    summary_.defined_vertices = seeded.field.size();
+    return seeded;
+}
+
+VertexPlacement Reconstructor::vertex_placement() const {
+    return config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
 }
 
 ReconstructionConfig Reconstructor::surface_config(bool from_viewpoints) const {

@@ -17,6 +17,7 @@
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/map/free_space.hpp"
 #include "lidarsurf/map/live_mesh.hpp"
+#include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
@@ -126,6 +127,13 @@ private:
     /// The configuration the surface is extracted with: config_, without bridges on a grid
     /// fused from viewpoints (a map's scans fill in each other's rings).
     ReconstructionConfig surface_config(bool from_viewpoints) const;
+    /// Sets summary().memory_estimate (the grid, the previous field, the carver and what the
+    /// extraction will allocate) and throws ResourceLimit when it passes the budget.
+    void check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation);
+    /// The fast path's field over the grid (reusing the previous one) or over `region`; its
+    /// counts and time in the summary.
+    SeededTsdf seeded_field(const ReconstructionConfig& config, const SearchRegion* region);
+    VertexPlacement vertex_placement() const;
     ReconstructionConfig config_;
     Eigen::Vector3d sensor_;
     VoxelGrid grid_;
