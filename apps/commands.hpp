@@ -88,7 +88,10 @@ struct FuseInput {
     MeshFormat format = MeshFormat::Auto;
 
     const Eigen::Isometry3d& pose(std::size_t n) const { return drives[scans[n].drive].poses[scans[n].frame]; }
-    std::filesystem::path scan_path(std::size_t n) const { return drives[scans[n].drive].seq.scan(scans[n].frame); }
+    /// Scan n in the world frame.
+    PointCloud read(std::size_t n, const PointReadOptions& options) const {
+        return read_world_scan(drives[scans[n].drive].seq, scans[n].frame, pose(n), options);
+    }
     /// "000042", or "2:000042" (drive 2) with several drives.
     std::string label(std::size_t n) const;
     /// The drives' directories, and where their poses came from, for reports.

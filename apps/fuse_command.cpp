@@ -142,13 +142,7 @@ FuseInput read_fuse_input(const FuseOptions& o) {
         d.poses = read_sequence_poses(d.where);
         if (d.poses.size() < available)
             throw InvalidInput(d.where.poses.string() + ": " + std::to_string(d.poses.size()) + " poses for " + std::to_string(available) + " scans");
-        const auto first = static_cast<std::size_t>(o.first);
-        if (first >= available)
-            throw InvalidArgument("--first " + std::to_string(first) + ": the sequence " + dir + " has " + std::to_string(available) + " scans");
-        std::size_t taken = 0;
-        for (std::size_t i = first; i < available && (o.frames == 0 || taken < static_cast<std::size_t>(o.frames));
-             i += static_cast<std::size_t>(o.step), ++taken)
-            in.scans.push_back({in.drives.size(), i});
+        for (std::size_t i : select_frames(available, o.first, o.frames, o.step, dir)) in.scans.push_back({in.drives.size(), i});
         files.input_sequence(d.seq.dir);
         files.input(d.where.poses);
         if (!d.where.calib.empty()) files.input(d.where.calib);
@@ -161,8 +155,7 @@ FuseInput read_fuse_input(const FuseOptions& o) {
 }
 
 int run_fuse(const FuseOptions& o) {
-    if (o.first < 0 || o.frames < 0 || o.step < 1 || o.remesh_every < 0)
-        throw InvalidArgument("--first and --frames must be >= 0, --step >= 1, --remesh-every >= 0");
+    if (o.remesh_every < 0) throw InvalidArgument("--remesh-every must be >= 0");
     if (!std::isfinite(o.live_budget_ms) || o.live_budget_ms < 0 || o.live_check_every < 0)
         throw InvalidArgument("--live-budget-ms and --live-check-every must be >= 0");
     if (!o.live && o.live_check_every > 0) throw InvalidArgument("--live-check-every measures the live mesh: add --live");
@@ -212,9 +205,8 @@ int run_fuse(const FuseOptions& o) {
         if (o.rate > 0) std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                                   std::chrono::duration<double>(static_cast<double>(n) / o.rate)));
         auto t0 = std::chrono::steady_clock::now();
-        PointCloud cloud = read_points(in.scan_path(n), m.read);
+        const PointCloud cloud = in.read(n, m.read);  // NaN stays NaN: integrate drops it
         const Eigen::Isometry3d& pose = in.pose(n);
-        for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN: integrate drops it
         read_ms += ms_since(t0);
         const double before = rec.summary().seconds_insert + rec.summary().seconds_carve;
         const auto t_update = std::chrono::steady_clock::now();

@@ -21,12 +21,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     std::FILE* const report = report_stream(o.output);
     const auto start = std::chrono::steady_clock::now();
     // Scan n of the fusion (frame in.frames[n]) in the world frame, and where it was seen from.
-    const auto read_scan = [&](std::size_t n) {
-        PointCloud cloud = read_points(in.scan_path(n), m.read);
-        const Eigen::Isometry3d& pose = in.pose(n);
-        for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN: no tile keeps it
-        return std::move(cloud.points);
-    };
+    const auto read_scan = [&](std::size_t n) { return in.read(n, m.read).points; };  // NaN stays NaN: no tile keeps it
     std::vector<ScanReach> reach;
     reach.reserve(in.scans.size());
     {

@@ -19,7 +19,6 @@ from . import _lidarsurf as _ls
 
 __all__ = ["fuse_tiles", "TileResult"]
 
-_FRAME = re.compile(r"^\d{6}\.bin$")
 _TEMPORARY = re.compile(r"^tile_-?\d+_-?\d+\.ply\.tmp\.\d+\.\d+$")
 
 
@@ -32,15 +31,6 @@ class TileResult(tuple):
 
     paths = property(lambda self: self[0], doc="The tile meshes (.ply), in the index's order.")
     index = property(lambda self: self[1], doc="The index file: the plan and, per tile, its key, path and counts.")
-
-
-def _frames(sequence, first, frames, step):
-    velodyne = os.path.join(sequence, "velodyne")
-    if not os.path.isdir(velodyne):
-        raise FileNotFoundError(f"{sequence}: no velodyne/ directory (KITTI layout: velodyne/NNNNNN.bin and poses.txt)")
-    count = sum(1 for f in os.listdir(velodyne) if _FRAME.match(f))
-    indices = list(range(first, count, step))
-    return indices[:frames] if frames else indices
 
 
 # The tasks: Python functions, which Dask sends by name (the extension's functions do not pickle).
@@ -94,9 +84,7 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
     config = config if config is not None else _ls.Config()
     tiles = _ls.TileConfig(tile_size, halo_cubes)
     config.validate()
-    indices = _frames(sequence, first, frames, step)
-    if not indices:
-        raise ValueError(f"{sequence}: no scan to fuse")
+    indices = _ls.sequence_frames(sequence, first, frames, step)
     with contextlib.ExitStack() as stack:
         if client is None:
             client = stack.enter_context(_local_client())

@@ -35,11 +35,7 @@ struct Sequence {
                 throw InvalidArgument(dir + ": frame " + std::to_string(i) + " has no scan or no pose (" + std::to_string(available) +
                                       " scans, " + std::to_string(poses.size()) + " poses)");
     }
-    std::vector<Eigen::Vector3d> scan(std::size_t n) const {
-        PointCloud cloud = read_points(seq.scan(frames[n]), {});
-        for (Eigen::Vector3d& p : cloud.points) p = poses[frames[n]] * p;
-        return std::move(cloud.points);
-    }
+    std::vector<Eigen::Vector3d> scan(std::size_t n) const { return read_world_scan(seq, frames[n], poses[frames[n]]).points; }
     Eigen::Vector3d viewpoint(std::size_t n) const { return poses[frames[n]].translation(); }
 };
 
@@ -103,6 +99,17 @@ void bind_tiles(py::module_& m) {
             o << "TileConfig(tile_size=" << c.tile_size << ", halo_cubes=" << c.halo_cubes << ")";
             return o.str();
         });
+
+    m.def(
+        "sequence_frames",
+        [](const std::string& sequence, int first, int frames, int step) {
+            const KittiSequence seq{sequence};
+            return select_frames(seq.frame_count(), first, frames, step, sequence);
+        },
+        py::arg("sequence"), py::arg("first") = 0, py::arg("frames") = 0, py::arg("step") = 1,
+        "The frames of a sequence (KITTI layout) that `lidarsurf fuse` takes with --first, --frames and --step: from "
+        "`first`, every `step`-th, at most `frames` (0: to the last). Raises OSError without velodyne/, ValueError for "
+        "a gap in its numbering or a bad range.");
 
     m.def(
         "sequence_reaches",

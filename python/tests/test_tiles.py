@@ -99,5 +99,5 @@ def test_configs_travel_and_bad_plans_are_refused(tmp_path):
         lidarsurf.TilePlan(reaches, lidarsurf.Config(), lidarsurf.TileConfig())
     with pytest.raises(ValueError, match="paper"):
         lidarsurf.TilePlan(reaches, lidarsurf.Config.paper(), lidarsurf.TileConfig())
-    with pytest.raises(FileNotFoundError):
+    with pytest.raises(OSError):
         lidarsurf.fuse_tiles(str(tmp_path / "nowhere"), str(tmp_path / "out"), client=object())

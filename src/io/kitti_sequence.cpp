@@ -6,6 +6,7 @@
 #include "byte_reader.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
+#include "lidarsurf/io/point_reader.hpp"
 
 namespace lidarsurf {
 
@@ -134,6 +135,23 @@ void write_poses(const std::vector<Eigen::Isometry3d>& poses, const std::filesys
             }
     }
     file.commit();
+}
+
+std::vector<std::size_t> select_frames(std::size_t available, int first, int frames, int step, const std::string& name) {
+    if (first < 0 || frames < 0 || step < 1) throw InvalidArgument("--first and --frames must be >= 0, --step >= 1");
+    if (static_cast<std::size_t>(first) >= available)
+        throw InvalidArgument("--first " + std::to_string(first) + ": the sequence " + name + " has " + std::to_string(available) + " scans");
+    std::vector<std::size_t> out;
+    for (auto i = static_cast<std::size_t>(first); i < available && (frames == 0 || out.size() < static_cast<std::size_t>(frames));
+         i += static_cast<std::size_t>(step))
+        out.push_back(i);
+    return out;
+}
+
+PointCloud read_world_scan(const KittiSequence& seq, std::size_t frame, const Eigen::Isometry3d& pose, const PointReadOptions& options) {
+    PointCloud cloud = read_points(seq.scan(frame), options);
+    for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN
+    return cloud;
 }
 
 }  // namespace lidarsurf

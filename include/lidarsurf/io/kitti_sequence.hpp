@@ -14,6 +14,8 @@
 
 #include <Eigen/Geometry>
 
+#include "lidarsurf/io/point_reader.hpp"
+
 namespace lidarsurf {
 
 struct KittiSequence {
@@ -32,6 +34,16 @@ struct KittiSequence {
     /// would be left out silently).
     std::size_t frame_count() const;
 };
+
+/// The frames a run takes of a sequence of `available` scans named `name`: from `first`, every
+/// `step`-th, at most `frames` of them (0: to the last). Throws InvalidArgument for a negative
+/// first or frames, a step below 1, or a first frame past the last.
+std::vector<std::size_t> select_frames(std::size_t available, int first, int frames, int step, const std::string& name);
+
+/// Scan `frame` of `seq` moved into the world by its sensor-to-world `pose` (a non-finite point
+/// stays non-finite). Throws as read_points.
+PointCloud read_world_scan(const KittiSequence& seq, std::size_t frame, const Eigen::Isometry3d& pose,
+                           const PointReadOptions& options = {});
 
 /// Where a sequence's poses are, in the layouts users have:
 ///  - `poses_flag` when given (sensor-to-world lidar poses, e.g. from an odometry such as kiss-icp;
