@@ -96,7 +96,7 @@ TEST(BadInput, MalformedFilesGiveFormatErrors) {
         {"text with a word", ".xyz", "1 2 3\n4 5 six\n", "line 2"},
         {"text with two columns", ".xyz", "1 2\n3 4\n", "xyz"},
     };
-    const auto dir = test::temp_dir("bad_input");
+    const test::TempDir dir("bad_input");
     int i = 0;
     for (const auto& r : rows) {
         const auto path = dir / (std::to_string(i++) + r.extension);

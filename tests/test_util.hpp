@@ -80,15 +80,31 @@ inline Eigen::Vector3d triangle_normal(const Mesh& m, const std::array<std::uint
     return (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]);
 }
 
-/// A fresh empty directory under the system temp dir.
-inline std::filesystem::path temp_dir(const std::string& name) {
-    static int counter = 0;
-    auto dir = std::filesystem::temp_directory_path() /
-               ("lidarsurf_test_" + name + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    std::filesystem::remove_all(dir);
-    std::filesystem::create_directories(dir);
-    return dir;
-}
+/// A fresh empty directory under the system temp dir, removed with what it holds when the
+/// object goes (a test leaves nothing behind).
+class TempDir {
+public:
+    explicit TempDir(const std::string& name) {
+        static int counter = 0;
+        path_ = std::filesystem::temp_directory_path() /
+                ("lidarsurf_test_" + name + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        std::filesystem::remove_all(path_);
+        std::filesystem::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ignored;
+        std::filesystem::remove_all(path_, ignored);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+    operator const std::filesystem::path&() const { return path_; }
+    std::filesystem::path operator/(const std::filesystem::path& p) const { return path_ / p; }
+    std::string string() const { return path_.string(); }
+
+private:
+    std::filesystem::path path_;
+};
 
 /// The fast path against the reference: the same triangles, vertices within 1e-6 m.
 inline void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {

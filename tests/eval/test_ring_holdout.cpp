@@ -19,6 +19,7 @@
 #include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/sim/analytic_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
+#include "test_util.hpp"
 
 using namespace lidarsurf;
 
@@ -212,7 +213,8 @@ TEST(RingHoldout, OddRingsOfAnExactWorldLieOnTheMeshOfTheEvenRings) {
 }
 
 TEST(ReadRings, TheRingFieldOfNuScenesRecords) {
-    const auto path = std::filesystem::temp_directory_path() / "lidarsurf_rings.bin";
+    const test::TempDir dir("rings");
+    const auto path = dir / "rings.bin";
     {
         std::ofstream f(path, std::ios::binary);
         const float rec[3][5] = {{1, 2, 3, 9, 0}, {NAN, 0, 0, 9, 7}, {4, 5, 6, 9, 31}};

@@ -42,7 +42,7 @@ void write_atomically(const fs::path& target, const std::string& text) {
 }
 
 TEST(AtomicFile, WritesThroughASymbolicLinkAndKeepsIt) {
-    const fs::path d = test::temp_dir("atomic_link");
+    const test::TempDir d("atomic_link");
     fs::create_directories(d / "real");
     std::ofstream(d / "real" / "mesh.ply") << "old";
     fs::create_symlink("real/mesh.ply", d / "link.ply");                  // relative target
@@ -60,7 +60,7 @@ TEST(AtomicFile, WritesThroughASymbolicLinkAndKeepsIt) {
 }
 
 TEST(AtomicFile, WritesAFifoAndADeviceDirectly) {
-    const fs::path d = test::temp_dir("atomic_fifo");
+    const test::TempDir d("atomic_fifo");
     const fs::path fifo = d / "out.ply";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
     std::string got;
@@ -76,7 +76,7 @@ TEST(AtomicFile, WritesAFifoAndADeviceDirectly) {
 }
 
 TEST(AtomicFile, TemporaryNameFitsTheNameLimit) {
-    const fs::path d = test::temp_dir("atomic_long");
+    const test::TempDir d("atomic_long");
     const std::string name = std::string(250, 'a') + ".ply";  // 254 bytes: the name limit is 255
     write_atomically(d / name, "long");
     EXPECT_EQ(slurp(d / name), "long");
@@ -94,7 +94,7 @@ TEST(AtomicFile, TemporaryNameFitsTheNameLimit) {
 }
 
 TEST(AtomicDirectory, AppearsWholeAndReplacesAnOldOneInOneStep) {
-    const fs::path d = test::temp_dir("atomic_dir");
+    const test::TempDir d("atomic_dir");
     const fs::path target = d / "seq";
     {
         AtomicDirectory out(target);
@@ -124,7 +124,7 @@ TEST(AtomicDirectory, AppearsWholeAndReplacesAnOldOneInOneStep) {
 // stay, and nothing is committed afterwards. In a child process: the registry stays closed for
 // good once it has run.
 TEST(AtomicFile, RemovePendingOutputsRemovesEveryTemporaryAndStopsCommits) {
-    const fs::path d = test::temp_dir("atomic_pending");
+    const test::TempDir d("atomic_pending");
     write_atomically(d / "done.ply", "finished");
     const pid_t child = ::fork();
     ASSERT_GE(child, 0);

@@ -9,24 +9,17 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/png_writer.hpp"
+#include "test_util.hpp"
 
 using namespace lidarsurf;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir() {
-    const fs::path d = fs::temp_directory_path() / ("lidarsurf_seq_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-                                                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
-
 void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
 TEST(KittiSequence, PosesRoundTripExactly) {
-    const fs::path d = temp_dir();
+    const test::TempDir d("seq");
     std::vector<Eigen::Isometry3d> poses;
     for (int i = 0; i < 5; ++i) {
         Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
@@ -42,7 +35,7 @@ TEST(KittiSequence, PosesRoundTripExactly) {
 }
 
 TEST(KittiSequence, MalformedPosesNameTheLine) {
-    const fs::path d = temp_dir();
+    const test::TempDir d("seq");
     write(d / "short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
     try {
         read_poses(d / "short.txt");
@@ -67,7 +60,7 @@ TEST(KittiSequence, MalformedPosesNameTheLine) {
 // poses P_i = T L_i T^-1 (what KITTI publishes); converting them back must give L_i, and a point
 // of scan i must land at the same world point (up to the fixed frame change) either way.
 TEST(KittiSequence, CalibrationTrConvertsCameraPosesToTheLidars) {
-    const fs::path d = temp_dir();
+    const test::TempDir d("seq");
     // KITTI's real odometry Tr (sequence 00), whose rotation is orthonormal to ~1e-7.
     const std::string tr_line =
         "Tr: 4.276802385584e-04 -9.999672484946e-01 -8.084491683471e-03 -1.198459927713e-02 "
@@ -119,7 +112,7 @@ TEST(KittiSequence, MirroredPoseOrCalibrationIsRefused) {
 }
 
 TEST(KittiSequence, CountsConsecutiveFrames) {
-    const fs::path d = temp_dir();
+    const test::TempDir d("seq");
     const KittiSequence seq{d};
     EXPECT_THROW(seq.frame_count(), IoError);
     fs::create_directories(d / "velodyne");
@@ -139,7 +132,7 @@ TEST(KittiSequence, CountsConsecutiveFrames) {
 }
 
 TEST(PngWriter, PixelsReadBackByLibpng) {
-    const fs::path d = temp_dir();
+    const test::TempDir d("seq");
     Image img;
     img.width = 7;
     img.height = 3;

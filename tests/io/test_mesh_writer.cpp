@@ -30,7 +30,7 @@ std::string slurp(const std::filesystem::path& p) {
 }
 
 TEST(MeshWriter, RoundTripsEveryFormat) {
-    const auto dir = test::temp_dir("mesh");
+    const test::TempDir dir("mesh");
     for (double offset : {0.0, 5e5}) {  // far from the origin the PLY switches to double
         const Mesh m = tetrahedron(offset);
         for (const auto& [file, fmt] : {std::pair{"a.ply", MeshFormat::PlyBinary}, {"b.ply", MeshFormat::PlyAscii}, {"c.obj", MeshFormat::Obj}}) {
@@ -52,7 +52,7 @@ TEST(MeshWriter, RoundTripsEveryFormat) {
 }
 
 TEST(MeshWriter, FailureLeavesPreviousOutputIntact) {
-    const auto dir = test::temp_dir("atomic");
+    const test::TempDir dir("atomic");
     const auto out = dir / "mesh.ply";
     write_mesh(tetrahedron(), out);
     const std::string before = slurp(out);

@@ -33,7 +33,7 @@ void expect_points(const PointCloud& c, const std::vector<Eigen::Vector3d>& expe
 }
 
 TEST(KittiBin, RoundTripAndExtraFields) {
-    const auto dir = test::temp_dir("bin");
+    const test::TempDir dir("bin");
     PointCloud cloud{sample_points()};
     write_points(cloud, dir / "a.bin");
     expect_points(read_points(dir / "a.bin"), sample_points());  // values are exact in float32
@@ -48,7 +48,7 @@ TEST(KittiBin, RoundTripAndExtraFields) {
 }
 
 TEST(PointWriter, EveryExtensionReadsBack) {
-    const auto dir = test::temp_dir("point_writer");
+    const test::TempDir dir("point_writer");
     PointCloud cloud;
     cloud.points = {{1.0 / 3.0, -2.25, 1e5 + 0.125}, {10.0, 20.0, -1.75}, {-0.5, 0.0, 3.0}};
     for (const char* name : {"a.xyz", "a.txt", "a.CSV", "a.ply"}) {  // exact: text at 17 digits, PLY in double beyond 1e4
