@@ -102,6 +102,15 @@ struct FuseInput {
 FuseInput read_fuse_input(const FuseOptions& o);
 /// fuse --tile-size: the map in tiles, one after the other, the mesh written tile by tile.
 int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in);
+/// The side of the squares `fuse` meshes its map in when it writes it (write_by_squares).
+inline constexpr double kWriteSquare = 64.0;
+/// Meshes the map of `rec` square by square (the tiles of `plan`, map/tiles.hpp's mesh_tile) and
+/// writes each square's mesh to `output` as it comes, the seams welded: the triangles of
+/// rec.extract_mesh(), without the whole mesh in memory. `whole`, when given, also gets every
+/// square's mesh (seams not welded: for a viewer). Returns rec's summary with the squares' counts
+/// and times summed. Throws InvalidInput for an empty mesh (nothing written).
+ReconstructionSummary write_by_squares(Reconstructor& rec, const TilePlan& plan, const std::string& output, MeshFormat format,
+                                       Mesh* whole = nullptr);
 
 struct MapBenchmarkOptions {
     std::string dir, out, vdbfusion, fuse_options;

@@ -23,7 +23,9 @@
 #include "viewer_page.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
+#include "lidarsurf/io/mesh_stream.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/map/tiles.hpp"
 #include "lidarsurf/eval/live_staleness.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/viz/live_server.hpp"
@@ -180,6 +182,10 @@ int run_fuse(const FuseOptions& o) {
     std::FILE* const report = report_stream(o.output);
 
     Reconstructor rec(m.config, in.pose(0) * m.sensor);
+    // The output is meshed square by square and written as it goes (write_by_squares), so that the
+    // whole mesh is never held: every seeded-surface method without the whole map's component filter.
+    const bool by_squares = m.config.seeded_surface && m.config.min_component_triangles == 0;
+    std::vector<ScanReach> reaches;
     Mesh mesh;
     double read_ms = 0;
     bool fresh = false;  // whether `mesh` holds every frame fused so far
@@ -208,6 +214,7 @@ int run_fuse(const FuseOptions& o) {
         const PointCloud cloud = in.read(n, m.read);  // NaN stays NaN: integrate drops it
         const Eigen::Isometry3d& pose = in.pose(n);
         read_ms += ms_since(t0);
+        if (by_squares) reaches.push_back(scan_reach(cloud.points, pose * m.sensor));
         const double before = rec.summary().seconds_insert + rec.summary().seconds_carve;
         const auto t_update = std::chrono::steady_clock::now();
         rec.integrate(cloud.points, pose * m.sensor);
@@ -257,15 +264,23 @@ int run_fuse(const FuseOptions& o) {
             std::fflush(report);
         }
         row["resident_mib"] = resident_mib();
+        row["map_mib"] = static_cast<double>(rec.map_bytes()) / 1048576.0;
         per_frame.push_back(std::move(row));
     }
     progress.finish(std::to_string(rec.summary().voxels) + " voxels");
-    if (!fresh) mesh = rec.extract_mesh();
-    if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
     const auto t0 = std::chrono::steady_clock::now();
-    write_mesh(mesh, o.output, format);
-    const double write_ms = ms_since(t0);
-    const ReconstructionSummary& s = rec.summary();
+    ReconstructionSummary s;
+    if (by_squares) {
+        Mesh* const whole = server ? &mesh : nullptr;  // the live view's final map
+        if (whole) *whole = Mesh{};
+        s = write_by_squares(rec, TilePlan(std::move(reaches), m.config, TileConfig{kWriteSquare}), o.output, format, whole);
+    } else {
+        if (!fresh) mesh = rec.extract_mesh();
+        if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
+        write_mesh(mesh, o.output, format);
+        s = rec.summary();
+    }
+    const double write_ms = ms_since(t0) - 1e3 * (by_squares ? s.seconds_tsdf + s.seconds_mesh : 0.0);
     std::fprintf(report, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", in.name().c_str(), count,
                 method_name(m).c_str(), in.layout().c_str(), s.to_string().c_str(), read_ms, write_ms, o.output.c_str());
     if (!o.json.empty()) {
@@ -277,8 +292,8 @@ int run_fuse(const FuseOptions& o) {
                                   {"points", s.points_read},
                                   {"voxels", s.voxels},
                                   {"carved_voxels", s.carved_voxels},
-                                  {"mesh_vertices", mesh.vertices.size()},
-                                  {"mesh_triangles", mesh.triangles.size()},
+                                  {"mesh_vertices", s.mesh_vertices},
+                                  {"mesh_triangles", s.mesh_triangles},
                                   {"seconds",
                                    {{"read", read_ms / 1e3},
                                     {"insert", s.seconds_insert},
@@ -287,6 +302,7 @@ int run_fuse(const FuseOptions& o) {
                                     {"last_mesh", s.seconds_mesh},
                                     {"write", write_ms / 1e3}}},
                                   {"peak_resident_mib", peak_resident_mib()},
+                                  {"map_mib", static_cast<double>(rec.map_bytes()) / 1048576.0},
                                   {"per_frame", per_frame}};
         if (live) {
             const DirectedError update = summarize(update_times);

@@ -1,8 +1,9 @@
-// lidarsurf fuse --tile-size: the map in square tiles (map/tiles.hpp), one after the other. A
-// first pass reads every scan once for its reach (where it was seen from, how far its returns
-// go); then each tile reads the scans that reach it, is fused and meshed alone, and its mesh is
-// appended to the output (MeshStreamWriter), the seams welded (SeamWelder). Memory holds one
-// tile's grid and mesh, never the map's.
+// The map in squares (map/tiles.hpp). `fuse --tile-size`: one tile after the other. A first pass
+// reads every scan once for its reach (where it was seen from, how far its returns go); then each
+// tile reads the scans that reach it, is fused and meshed alone, and its mesh is appended to the
+// output (MeshStreamWriter), the seams welded (SeamWelder). Memory holds one tile's grid and mesh,
+// never the map's. Plain `fuse` writes its one map the same way, square by square
+// (write_by_squares), so that the whole mesh is never held either.
 #include <chrono>
 #include <cstdio>
 
@@ -16,6 +17,40 @@
 #include "lidarsurf/pipeline.hpp"
 
 namespace lidarsurf::cli {
+
+namespace {
+
+// Float coordinates keep ~1e-3 m up to 1e4 m (write_mesh's rule), decided before the header.
+bool double_coordinates(const TilePlan& plan) {
+    const Eigen::AlignedBox3d& b = plan.bounds();
+    return b.min().cwiseAbs().maxCoeff() > 1e4 - 100 || b.max().cwiseAbs().maxCoeff() > 1e4 - 100;
+}
+
+}  // namespace
+
+ReconstructionSummary write_by_squares(Reconstructor& rec, const TilePlan& plan, const std::string& output, MeshFormat format, Mesh* whole) {
+    MeshStreamWriter writer(output, format, double_coordinates(plan));
+    SeamWelder welder(plan);
+    ReconstructionSummary total = rec.summary();
+    total.candidate_vertices = total.reused_vertices = total.defined_vertices = 0;
+    total.seconds_tsdf = total.seconds_mesh = 0;
+    for (const TileKey& key : plan.tiles()) {
+        const Mesh part = mesh_tile(rec, plan, key);
+        if (part.triangles.empty()) continue;
+        const ReconstructionSummary& s = rec.summary();  // the square's extraction
+        total.candidate_vertices += s.candidate_vertices, total.reused_vertices += s.reused_vertices;
+        total.defined_vertices += s.defined_vertices;
+        total.seconds_tsdf += s.seconds_tsdf, total.seconds_mesh += s.seconds_mesh;
+        total.memory_estimate = std::max(total.memory_estimate, s.memory_estimate);
+        writer.append(part, welder.weld(key, part, writer.vertices()));
+        if (whole) whole->append(part);
+    }
+    if (writer.triangles() == 0) throw InvalidInput("the fused sequence gives an empty mesh");
+    writer.commit();
+    total.mesh_vertices = writer.vertices();
+    total.mesh_triangles = writer.triangles();
+    return total;
+}
 
 int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     std::FILE* const report = report_stream(o.output);
@@ -35,10 +70,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     const TilePlan plan(std::move(reach), m.config, o.tiles);
     const double plan_s = ms_since(start) / 1e3;
 
-    // Float coordinates keep ~1e-3 m up to 1e4 m (write_mesh's rule), decided before the header.
-    const Eigen::AlignedBox3d& b = plan.bounds();
-    const bool dbl = b.min().cwiseAbs().maxCoeff() > 1e4 - 100 || b.max().cwiseAbs().maxCoeff() > 1e4 - 100;
-    MeshStreamWriter writer(o.output, in.format, dbl);
+    MeshStreamWriter writer(o.output, in.format, double_coordinates(plan));
     SeamWelder welder(plan);
     nlohmann::json per_tile = nlohmann::json::array();
     std::size_t points = 0, voxels = 0, carved = 0;

@@ -224,8 +224,7 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
 
 void Reconstructor::check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation) {
     const auto budget = static_cast<std::size_t>(budget_bytes());
-    summary_.memory_estimate = grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) + (carver_ ? carver_->memory_bytes() : 0) +
-                               estimate_extraction_bytes(grid_, config, evaluation, budget);
+    summary_.memory_estimate = map_bytes() + estimate_extraction_bytes(grid_, config, evaluation, budget);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
                                         format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
@@ -253,6 +252,11 @@ ReconstructionConfig Reconstructor::surface_config(bool from_viewpoints) const {
     ReconstructionConfig c = config_;
     if (from_viewpoints) c.bridge_reach = 0;  // bridges are for the rings of one scan
     return c;
+}
+
+std::size_t Reconstructor::map_bytes() const {
+    return grid_.memory_bytes() + (previous_ ? previous_->memory_bytes() : 0) + (carver_ ? carver_->memory_bytes() : 0) +
+           (live_ ? live_->memory_bytes() : 0);
 }
 
 double Reconstructor::budget_bytes() const { return config_.max_memory_mb * 1048576.0; }

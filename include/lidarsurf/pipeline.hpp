@@ -112,6 +112,9 @@ public:
 
     const ReconstructionSummary& summary() const { return summary_; }
     const VoxelGrid& grid() const { return grid_; }
+    /// Bytes the map holds between scans: the grid, the carving evidence, the last extraction's
+    /// field (kept for the next incremental one) and the live mesh (capacities).
+    std::size_t map_bytes() const;
     const ReconstructionConfig& config() const { return config_; }
 
 private:

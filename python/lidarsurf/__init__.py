@@ -55,7 +55,7 @@ def fuse_live(sequence, budget_ms=30.0, reconstructor=None, first=0, frames=0, s
     it) scan by scan, yielding a LiveUpdate after each: what `lidarsurf fuse --serve` streams to its
     page, for a viewer or planner of your own. Apply each delta's `removed`, then its `changed`, to a
     dict {key: Mesh} to hold the live mesh. Pass a Reconstructor (with your Config) to keep it: its
-    extract_mesh() gives the exact mesh at the end, as `fuse` writes it.
+    extract_mesh() gives the exact mesh at the end: the triangles `fuse` writes.
     """
     poses = read_poses(_os.path.join(sequence, "poses.txt"))
     scans = sorted(f for f in _os.listdir(_os.path.join(sequence, "velodyne")) if f.endswith(".bin"))

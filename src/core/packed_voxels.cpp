@@ -79,8 +79,8 @@ void PackedVoxels::pack(std::size_t b) const {
         for (std::uint64_t bits = byte; bits; bits &= bits - 1, ++rank) {
             const int offset = std::countr_zero(bits) | (row << 3);
             const VoxelStats& s = grid.stats()[static_cast<std::size_t>(index[static_cast<std::size_t>(offset)])];
-            const Eigen::Matrix3d& m = s.scatter;
-            out[rank] = {static_cast<double>(s.count), s.mean.x(), s.mean.y(), s.mean.z(), m(0, 0), m(0, 1), m(0, 2), m(1, 1), m(1, 2), m(2, 2)};
+            const SymmetricMatrix3& m = s.scatter;
+            out[rank] = {static_cast<double>(s.count), s.mean.x(), s.mean.y(), s.mean.z(), m.xx, m.xy, m.xz, m.yy, m.yz, m.zz};
         }
     }
 }

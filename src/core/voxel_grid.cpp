@@ -129,11 +129,11 @@ std::size_t VoxelGrid::remove(std::size_t voxel) {
         *slot_of(keys_[last]).first = static_cast<std::int32_t>(voxel);
         keys_[voxel] = keys_[last];
         stats_[voxel] = stats_[last];
-        if (viewpoints_enabled_) viewpoint_sums_[voxel] = viewpoint_sums_[last];
+        if (viewpoints_enabled_) viewpoint_means_[voxel] = viewpoint_means_[last];
     }
     keys_.pop_back();
     stats_.pop_back();
-    if (viewpoints_enabled_) viewpoint_sums_.pop_back();
+    if (viewpoints_enabled_) viewpoint_means_.pop_back();
     return last;
 }
 
@@ -278,10 +278,15 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 512),
                       [&](const auto& r) { call_at_simd_level(add_runs, r.begin(), r.end()); });
     if (viewpoints_enabled_) {
-        viewpoint_sums_.resize(stats_.size(), Eigen::Vector3d::Zero());
+        viewpoint_means_.resize(stats_.size(), Eigen::Vector3f::Zero());
         const Eigen::Vector3d local = *viewpoint - origin_;
-        for (std::size_t run = 0; run + 1 < runs.size(); ++run)
-            viewpoint_sums_[voxel[order[runs[run]]]] += static_cast<double>(runs[run + 1] - runs[run]) * local;
+        for (std::size_t run = 0; run + 1 < runs.size(); ++run) {
+            // The running mean over the voxel's points, the batch's k points at `local` last.
+            const std::uint32_t v = voxel[order[runs[run]]];
+            const double k = static_cast<double>(runs[run + 1] - runs[run]);
+            const Eigen::Vector3d mean = viewpoint_means_[v].cast<double>();
+            viewpoint_means_[v] = (mean + (local - mean) * (k / static_cast<double>(stats_[v].count))).cast<float>();
+        }
     }
     if (hits) {
         hits->clear();
@@ -310,9 +315,7 @@ void VoxelGrid::enable_viewpoints(const Eigen::Vector3d& earlier) {
     if (!earlier.allFinite()) throw InvalidArgument("viewpoint must be finite");
     if (viewpoints_enabled_) return;
     viewpoints_enabled_ = true;
-    viewpoint_sums_.resize(stats_.size());
-    const Eigen::Vector3d local = earlier - origin_;
-    for (std::size_t v = 0; v < stats_.size(); ++v) viewpoint_sums_[v] = static_cast<double>(stats_[v].count) * local;
+    viewpoint_means_.assign(stats_.size(), (earlier - origin_).cast<float>());
 }
 
 std::optional<Eigen::Vector3d> VoxelGrid::mean_viewpoint(const VoxelKey& lo, const VoxelKey& hi) const {
@@ -321,7 +324,7 @@ std::optional<Eigen::Vector3d> VoxelGrid::mean_viewpoint(const VoxelKey& lo, con
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for_each_index_in_box(lo, hi, [&](const VoxelKey&, std::size_t v) {
         count += static_cast<double>(stats_[v].count);
-        sum += viewpoint_sums_[v];
+        sum += static_cast<double>(stats_[v].count) * viewpoint_means_[v].cast<double>();
     });
     if (count <= 0) return std::nullopt;
     return sum / count;
@@ -336,7 +339,7 @@ void VoxelGrid::clear_touched() {
 std::size_t VoxelGrid::memory_bytes() const {
     return index_.memory_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
            keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t) +
-           viewpoint_sums_.capacity() * sizeof(Eigen::Vector3d);
+           viewpoint_means_.capacity() * sizeof(Eigen::Vector3f);
 }
 
 std::pair<std::size_t, std::size_t> VoxelGrid::count_new(std::span<const Eigen::Vector3d> points) const {
@@ -372,7 +375,7 @@ std::size_t VoxelGrid::memory_bytes_after(std::size_t new_voxels, std::size_t ne
     const std::size_t voxels = keys_.size() + new_voxels, blocks = occupancy_.size() + new_blocks;
     std::size_t bytes = grown(keys_.capacity(), keys_.size() + batch) * sizeof(VoxelKey);  // the insert's room for every point
     bytes += grown(stats_.capacity(), voxels) * sizeof(VoxelStats);
-    if (viewpoints_enabled_) bytes += grown(viewpoint_sums_.capacity(), voxels) * sizeof(Eigen::Vector3d);
+    if (viewpoints_enabled_) bytes += grown(viewpoint_means_.capacity(), voxels) * sizeof(Eigen::Vector3f);
     bytes += grown(occupancy_.capacity(), blocks) * sizeof(Occupancy) + grown(touched_flag_.capacity(), blocks) +
              grown(touched_.capacity(), blocks) * sizeof(std::uint32_t);
     bytes += 2 * index_.memory_bytes() + new_blocks * (sizeof(BlockMap<std::int32_t>::Block) + 64) + 32 * sizeof(BlockMap<std::int32_t>::Block);

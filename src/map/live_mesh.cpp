@@ -162,15 +162,7 @@ void apply(std::span<const VoxelKey> removed, std::span<const MeshBlock> changed
 
 Mesh concatenate(const std::vector<MeshBlock>& blocks) {
     Mesh out;
-    for (const MeshBlock& b : blocks) {
-        const Mesh& m = b.mesh;
-        const auto base = static_cast<std::uint32_t>(out.vertices.size());
-        out.vertices.insert(out.vertices.end(), m.vertices.begin(), m.vertices.end());
-        out.normals.insert(out.normals.end(), m.normals.begin(), m.normals.end());
-        out.levels.insert(out.levels.end(), m.levels.begin(), m.levels.end());
-        out.confidence.insert(out.confidence.end(), m.confidence.begin(), m.confidence.end());
-        for (const auto& t : m.triangles) out.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
+    for (const MeshBlock& b : blocks) out.append(b.mesh);
     return out;
 }
 

@@ -119,8 +119,7 @@ std::size_t TilePlan::scans_of(const TileKey& t) const {
 
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
                ReconstructionSummary* summary) {
-    const ReconstructionConfig& config = plan.config();
-    Reconstructor rec(config, plan.sensor(), plan.grid_origin());
+    Reconstructor rec(plan.config(), plan.sensor(), plan.grid_origin());
     const Eigen::AlignedBox3d crop = plan.crop(tile);
     for (std::size_t i = 0; i < plan.scan_count(); ++i) {
         if (!plan.reaches(tile, i)) {
@@ -130,36 +129,40 @@ Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<st
         const std::vector<Eigen::Vector3d> points = scan(i);
         rec.integrate(points, plan.viewpoint(i), crop);
     }
-    Mesh mesh;
-    if (rec.grid().point_count() > 0) {
-        // The search: the blocks of cubes in the square that are within reach of a voxel, and the halo.
-        const VoxelGrid& grid = rec.grid();
-        const double alpha = config.voxel_size, block = alpha * Map::kSize;
-        const Eigen::AlignedBox3d sq = plan.square(tile);
-        const Eigen::Vector3d& o = grid.origin();
-        const int r = (config.max_reach() + 1 + Map::kSize - 1) / Map::kSize;
-        const auto block_lo = [&](double world, double org) { return static_cast<int>(std::floor((world - org) / block)); };
-        const int bx0 = block_lo(sq.min().x(), o.x()), bx1 = block_lo(sq.max().x(), o.x());
-        const int by0 = block_lo(sq.min().y(), o.y()), by1 = block_lo(sq.max().y(), o.y());
-        BlockIndex seen;
-        std::vector<VoxelKey> core;
-        for (const VoxelKey& b : grid.index().block_keys()) {
-            if (b.x() + r < bx0 || b.x() - r > bx1 || b.y() + r < by0 || b.y() - r > by1) continue;
-            for (int z = -r; z <= r; ++z)
-                for (int y = std::max(b.y() - r, by0); y <= std::min(b.y() + r, by1); ++y)
-                    for (int x = std::max(b.x() - r, bx0); x <= std::min(b.x() + r, bx1); ++x) {
-                        const VoxelKey k(x, y, b.z() + z);
-                        if (seen.try_emplace(k, 0).second) core.push_back(k);
-                    }
-        }
-        const SearchRegion region = SearchRegion::around(core, plan.tile_config().halo_cubes);
-        const auto owns = [&](const VoxelKey& cube) {
-            return plan.tile_of(o + alpha * (cube.cast<double>() + Eigen::Vector3d::Constant(0.5))) == tile;
-        };
-        mesh = rec.extract_mesh(region, owns);
-    }
+    Mesh mesh = mesh_tile(rec, plan, tile);
     if (summary) *summary = rec.summary();
     return mesh;
+}
+
+Mesh mesh_tile(Reconstructor& rec, const TilePlan& plan, const TileKey& tile) {
+    const VoxelGrid& grid = rec.grid();
+    if (grid.point_count() == 0) return {};
+    // The search: the blocks of cubes in the square that are within reach of a voxel, and the halo.
+    const ReconstructionConfig& config = plan.config();
+    const double alpha = config.voxel_size, block = alpha * Map::kSize;
+    const Eigen::AlignedBox3d sq = plan.square(tile);
+    const Eigen::Vector3d& o = grid.origin();
+    const int r = (config.max_reach() + 1 + Map::kSize - 1) / Map::kSize;
+    const auto block_lo = [&](double world, double org) { return static_cast<int>(std::floor((world - org) / block)); };
+    const int bx0 = block_lo(sq.min().x(), o.x()), bx1 = block_lo(sq.max().x(), o.x());
+    const int by0 = block_lo(sq.min().y(), o.y()), by1 = block_lo(sq.max().y(), o.y());
+    BlockIndex seen;
+    std::vector<VoxelKey> core;
+    for (const VoxelKey& b : grid.index().block_keys()) {
+        if (b.x() + r < bx0 || b.x() - r > bx1 || b.y() + r < by0 || b.y() - r > by1) continue;
+        for (int z = -r; z <= r; ++z)
+            for (int y = std::max(b.y() - r, by0); y <= std::min(b.y() + r, by1); ++y)
+                for (int x = std::max(b.x() - r, bx0); x <= std::min(b.x() + r, bx1); ++x) {
+                    const VoxelKey k(x, y, b.z() + z);
+                    if (seen.try_emplace(k, 0).second) core.push_back(k);
+                }
+    }
+    if (core.empty()) return {};
+    const SearchRegion region = SearchRegion::around(core, plan.tile_config().halo_cubes);
+    const auto owns = [&](const VoxelKey& cube) {
+        return plan.tile_of(o + alpha * (cube.cast<double>() + Eigen::Vector3d::Constant(0.5))) == tile;
+    };
+    return rec.extract_mesh(region, owns);
 }
 
 std::size_t SeamWelder::KeyHash::operator()(const Key& k) const noexcept {

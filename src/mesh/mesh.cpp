@@ -29,4 +29,13 @@ double Mesh::triangle_area(std::size_t i) const {
     return 0.5 * (vertices[t[1]] - a).cross(vertices[t[2]] - a).norm();
 }
 
+void Mesh::append(const Mesh& part) {
+    const auto base = static_cast<std::uint32_t>(vertices.size());
+    vertices.insert(vertices.end(), part.vertices.begin(), part.vertices.end());
+    normals.insert(normals.end(), part.normals.begin(), part.normals.end());
+    levels.insert(levels.end(), part.levels.begin(), part.levels.end());
+    confidence.insert(confidence.end(), part.confidence.begin(), part.confidence.end());
+    for (const auto& t : part.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+}
+
 }  // namespace lidarsurf

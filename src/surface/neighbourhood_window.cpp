@@ -26,7 +26,7 @@ VoxelStats Moments::to_stats(const Eigen::Vector3d& p) const {
     s.count = static_cast<std::uint64_t>(n);
     const Eigen::Vector3d d = s1 / n;
     s.mean = p + d;
-    s.scatter = s2 - s1 * d.transpose();  // sum (x-p)(x-p)^T - n d d^T = sum (x-mu)(x-mu)^T
+    s.scatter = SymmetricMatrix3::upper_of(s2 - s1 * d.transpose());  // sum (x-p)(x-p)^T - n d d^T = sum (x-mu)(x-mu)^T
     return s;
 }
 

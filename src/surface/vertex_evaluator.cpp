@@ -35,7 +35,7 @@ bool may_bridge(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_l
 bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config) {
     // On the scatter S = n C rather than C (no division; fit_plane forms C itself): the planarity
     // bound is homogeneous of degree 2, and l3(C) > t^2 iff S - n t^2 I is positive definite.
-    const Eigen::Matrix3d& c = stats.scatter;
+    const Eigen::Matrix3d c = stats.scatter.full();
     if (config.min_planarity > 0) {
         const double t = c.trace();
         const double m = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1) + c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2) +

@@ -249,13 +249,7 @@ TEST(PackedVoxels, EveryVoxelIsFoundByRankWithItsStatistics) {
         const VoxelStats& s = grid.stats()[v];
         ASSERT_EQ(r.count, static_cast<double>(s.count));
         ASSERT_EQ(Eigen::Vector3d(r.mx, r.my, r.mz), s.mean);
-        const Eigen::Matrix3d& m = s.scatter;
-        ASSERT_EQ(r.xx, m(0, 0));
-        ASSERT_EQ(r.xy, m(0, 1));
-        ASSERT_EQ(r.xz, m(0, 2));
-        ASSERT_EQ(r.yy, m(1, 1));
-        ASSERT_EQ(r.yz, m(1, 2));
-        ASSERT_EQ(r.zz, m(2, 2));
+        ASSERT_EQ((SymmetricMatrix3{r.xx, r.xy, r.xz, r.yy, r.yz, r.zz}), s.scatter);
     }
     EXPECT_EQ(packed.find(VoxelKey(1000, 1000, 1000)), nullptr);
     for (int i = 0; i < 256; ++i) EXPECT_EQ(PackedVoxels::kBitCount[static_cast<std::size_t>(i)], std::bitset<8>(static_cast<unsigned>(i)).count());

@@ -296,7 +296,8 @@ TEST(VoxelGrid, MeanViewpointIsThePointWeightedMeanOfTheSensorPositions) {
             continue;
         }
         ASSERT_TRUE(mean.has_value());
-        EXPECT_LT((*mean - sum / count).norm(), 1e-9) << lo.transpose() << " " << hi.transpose();
+        // Kept as float means in the local frame: a few float roundings of the position.
+        EXPECT_LT((*mean - sum / count).norm(), 1e-6 * (1.0 + (sum / count).norm())) << lo.transpose() << " " << hi.transpose();
     }
     EXPECT_FALSE(grid.mean_viewpoint(VoxelKey(500, 500, 500), VoxelKey(510, 510, 510)).has_value());
 }
@@ -350,7 +351,7 @@ TEST(VoxelGrid, RemoveLeavesTheGridOfTheOtherVoxelsAndHitsNameEachVoxelsFirstPoi
         EXPECT_LT((s.mean - o->mean).norm(), 1e-12);
     });
     EXPECT_EQ(boxed, grid.size());
-    EXPECT_LT((*grid.mean_viewpoint(VoxelKey::Constant(-100), VoxelKey::Constant(100)) - Eigen::Vector3d(1, 2, 3)).norm(), 1e-9);
+    EXPECT_LT((*grid.mean_viewpoint(VoxelKey::Constant(-100), VoxelKey::Constant(100)) - Eigen::Vector3d(1, 2, 3)).norm(), 1e-5);
     for (const KeyTuple& k : removed) EXPECT_EQ(grid.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)}), nullptr);
     // A point in a removed voxel starts it afresh.
     const KeyTuple k = *removed.begin();

@@ -1,11 +1,13 @@
-// A map fused in tiles (map/tiles.hpp) against the same map fused whole (the oracle: one
-// Reconstructor over every scan): the tiles' triangles together are the whole map's, none lost
-// and none twice, each in the tile whose square holds its cube; the seams are welded; a tile
-// that a scan cannot reach counts it without its points.
+// A map fused in tiles (map/tiles.hpp), and one map meshed square by square, against the same
+// map fused and meshed whole (the oracle: one Reconstructor over every scan, one extraction): the
+// parts' triangles together are the whole map's, none lost and none twice, each in the tile whose
+// square holds its cube; the seams are welded; a tile that a scan cannot reach counts it without
+// its points.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <map>
+#include <memory>
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/map/tiles.hpp"
@@ -48,38 +50,47 @@ TilePlan plan_of(const std::vector<test::Scan>& drive, const ReconstructionConfi
     return TilePlan(std::move(reach), config, tiles);
 }
 
-Mesh whole_map(const std::vector<test::Scan>& drive, const ReconstructionConfig& config) {
-    Reconstructor rec(config, drive.front().from);
-    for (const test::Scan& s : drive) rec.integrate(s.points, s.from);
-    return rec.extract_mesh();
+// The whole map: one Reconstructor over every scan.
+std::unique_ptr<Reconstructor> whole_map(const std::vector<test::Scan>& drive, const ReconstructionConfig& config) {
+    auto rec = std::make_unique<Reconstructor>(config, drive.front().from);
+    for (const test::Scan& s : drive) rec->integrate(s.points, s.from);
+    return rec;
 }
 
-// Every tile fused apart, the meshes welded one after the other (as a MeshStreamWriter writes them).
+// Parts of a map welded one after the other (as a MeshStreamWriter writes them).
 struct Tiled {
     Mesh mesh;
     std::map<TileKey, Mesh> parts;
-};
-Tiled tiled_map(const TilePlan& plan, const std::vector<test::Scan>& drive) {
-    Tiled out;
-    SeamWelder welder(plan);
-    for (const TileKey& t : plan.tiles()) {
-        const Mesh part = fuse_tile(plan, t, [&](std::size_t i) { return drive[i].points; });
-        const std::vector<std::int64_t> existing = welder.weld(t, part, out.mesh.vertices.size());
+    void append(SeamWelder& welder, const TileKey& t, const Mesh& part) {
+        const std::vector<std::int64_t> existing = welder.weld(t, part, mesh.vertices.size());
         std::vector<std::uint32_t> index(part.vertices.size());
         for (std::size_t i = 0; i < part.vertices.size(); ++i) {
             if (existing[i] >= 0) {
                 index[i] = static_cast<std::uint32_t>(existing[i]);
                 continue;
             }
-            index[i] = static_cast<std::uint32_t>(out.mesh.vertices.size());
-            out.mesh.vertices.push_back(part.vertices[i]);
-            out.mesh.normals.push_back(part.normals[i]);
-            out.mesh.levels.push_back(part.levels[i]);
-            out.mesh.confidence.push_back(part.confidence[i]);
+            index[i] = static_cast<std::uint32_t>(mesh.vertices.size());
+            mesh.vertices.push_back(part.vertices[i]);
+            mesh.normals.push_back(part.normals[i]);
+            mesh.levels.push_back(part.levels[i]);
+            mesh.confidence.push_back(part.confidence[i]);
         }
-        for (const auto& tri : part.triangles) out.mesh.triangles.push_back({index[tri[0]], index[tri[1]], index[tri[2]]});
-        out.parts[t] = part;
+        for (const auto& tri : part.triangles) mesh.triangles.push_back({index[tri[0]], index[tri[1]], index[tri[2]]});
+        parts[t] = part;
     }
+};
+// Every tile fused apart.
+Tiled tiled_map(const TilePlan& plan, const std::vector<test::Scan>& drive) {
+    Tiled out;
+    SeamWelder welder(plan);
+    for (const TileKey& t : plan.tiles()) out.append(welder, t, fuse_tile(plan, t, [&](std::size_t i) { return drive[i].points; }));
+    return out;
+}
+// One map, meshed square by square (what `fuse` writes).
+Tiled squares_of(Reconstructor& rec, const TilePlan& plan) {
+    Tiled out;
+    SeamWelder welder(plan);
+    for (const TileKey& t : plan.tiles()) out.append(welder, t, mesh_tile(rec, plan, t));
     return out;
 }
 
@@ -87,12 +98,18 @@ void expect_tiles_equal_the_whole_map(const std::vector<test::Scan>& drive, cons
                                       const ReconstructionConfig& config = {}) {
     const TilePlan plan = plan_of(drive, config, tiles);
     ASSERT_GE(plan.tiles().size(), min_tiles);
-    const Mesh whole = whole_map(drive, config);
-    const Tiled tiled = tiled_map(plan, drive);
+    const std::unique_ptr<Reconstructor> rec = whole_map(drive, config);
+    const Mesh whole = rec->extract_mesh();
     ASSERT_GT(whole.triangles.size(), 10000u);
-    EXPECT_EQ(tiled.mesh.triangles.size(), whole.triangles.size());
-    EXPECT_TRUE(test::triangles_of(tiled.mesh) == test::triangles_of(whole)) << "the same triangles, none lost, none twice";
-    EXPECT_EQ(tiled.mesh.vertices.size(), whole.vertices.size()) << "each vertex on a seam written once";
+    const auto expect_whole = [&](const Mesh& mesh, const char* what) {
+        EXPECT_EQ(mesh.triangles.size(), whole.triangles.size()) << what;
+        EXPECT_TRUE(test::triangles_of(mesh) == test::triangles_of(whole)) << what << ": the same triangles, none lost, none twice";
+        EXPECT_EQ(mesh.vertices.size(), whole.vertices.size()) << what << ": each vertex on a seam written once";
+    };
+    // The whole map meshed square by square, as fuse writes it, and the tiles fused apart.
+    expect_whole(squares_of(*rec, plan).mesh, "one map in squares");
+    const Tiled tiled = tiled_map(plan, drive);
+    expect_whole(tiled.mesh, "tiles");
     std::size_t with_triangles = 0;
     for (const auto& [key, part] : tiled.parts) {
         with_triangles += !part.triangles.empty();

@@ -53,7 +53,7 @@ void expect_same_stats(const VoxelStats& a, const VoxelStats& b, double alpha, c
     ASSERT_EQ(a.count, b.count) << what;
     if (a.count == 0) return;
     EXPECT_LT((a.mean - b.mean).norm(), 1e-12 * alpha * 100) << what;
-    EXPECT_LT((a.scatter - b.scatter).norm(), 1e-9 * alpha * alpha * static_cast<double>(a.count)) << what;
+    EXPECT_LT((a.scatter.full() - b.scatter.full()).norm(), 1e-9 * alpha * alpha * static_cast<double>(a.count)) << what;
 }
 
 }  // namespace

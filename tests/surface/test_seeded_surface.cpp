@@ -360,7 +360,7 @@ TEST(SeededSurface, PhaseTimesArePartsOfTheCall) {
 // SearchRegion::around against a brute-force Chebyshev distance to the core blocks' cubes.
 TEST(SearchRegion, AroundHoldsExactlyTheCubesWithinTheHalo) {
     const std::vector<VoxelKey> core{{0, 0, 0}, {1, 0, 0}, {-2, 3, -1}};
-    for (int halo : {0, 1, 3, 8, 11}) {
+    for (int halo : {0, 1, 3, 8, 11, 20}) {
         const SearchRegion region = SearchRegion::around(core, halo);
         for (int z = -24; z < 16; ++z)
             for (int y = -10; y < 40; ++y)

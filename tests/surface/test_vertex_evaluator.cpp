@@ -391,7 +391,7 @@ TEST(VertexEvaluator, InvariantPreCheckOnlyRejectsWhatTheEigenvaluesReject) {
         const double l1 = std::pow(10.0, -3.0 * unit(rng)), l2 = l1 * std::pow(10.0, -4.0 * unit(rng)), l3 = l2 * std::pow(10.0, -4.0 * unit(rng));
         VoxelStats s;
         s.count = 50;
-        s.scatter = 50.0 * q * Eigen::Vector3d(l1, l2, l3).asDiagonal() * q.transpose();
+        s.scatter = SymmetricMatrix3::upper_of(50.0 * q * Eigen::Vector3d(l1, l2, l3).asDiagonal() * q.transpose());
         const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(s.covariance()).eigenvalues();
         const bool exact = ev[1] < c.min_planarity * ev[2] || ev[0] > t2;
         const bool pre = rejected_by_invariants(s, c);
@@ -409,7 +409,7 @@ TEST(VertexEvaluator, InvariantPreCheckOnlyRejectsWhatTheEigenvaluesReject) {
     // Guards off (the paper's modes): never rejects.
     VoxelStats blob;
     blob.count = 50;
-    blob.scatter = 50.0 * Eigen::Vector3d(1.0, 1e-9, 1e-9).asDiagonal();
+    blob.scatter = SymmetricMatrix3::upper_of(50.0 * Eigen::Matrix3d(Eigen::Vector3d(1.0, 1e-9, 1e-9).asDiagonal()));
     EXPECT_TRUE(rejected_by_invariants(blob, c));
     EXPECT_FALSE(rejected_by_invariants(blob, ReconstructionConfig::paper(Mode::AdaptiveGaussian)));
 }

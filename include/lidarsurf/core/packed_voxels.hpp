@@ -3,7 +3,7 @@
 // the statistics of its occupied voxels are stored contiguously in offset order and found by
 // their rank among the block's occupancy bits. Summing a box then reads the occupancy word it
 // already needs and one compact record per voxel, next to its neighbours' records, instead of
-// an index load and a 104-byte VoxelStats scattered in insertion order (the two cache misses
+// an index load and an 80-byte VoxelStats scattered in insertion order (the two cache misses
 // that dominated the sums).
 #include <array>
 #include <bit>

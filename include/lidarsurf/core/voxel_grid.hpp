@@ -185,7 +185,9 @@ private:
     std::vector<VoxelKey> keys_;
     std::vector<VoxelStats> stats_;
     bool viewpoints_enabled_ = false;
-    std::vector<Eigen::Vector3d> viewpoint_sums_;  // per voxel when enabled: sum of its points' sensor positions (local)
+    // Per voxel when enabled: the mean of its points' sensor positions (local frame; float: 1e-3 m at
+    // 10 km, for orienting a plane toward the sensors that saw it).
+    std::vector<Eigen::Vector3f> viewpoint_means_;
 };
 
 template <typename F>

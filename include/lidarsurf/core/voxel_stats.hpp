@@ -8,11 +8,27 @@
 
 namespace lidarsurf {
 
+/// A symmetric 3x3 matrix by its upper triangle: 48 bytes where an Eigen::Matrix3d takes 72.
+struct SymmetricMatrix3 {
+    double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+
+    /// The matrix whose upper triangle is `m`'s (the lower one is not read).
+    static SymmetricMatrix3 upper_of(const Eigen::Matrix3d& m) { return {m(0, 0), m(0, 1), m(0, 2), m(1, 1), m(1, 2), m(2, 2)}; }
+    Eigen::Matrix3d full() const {
+        Eigen::Matrix3d m;
+        m << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+        return m;
+    }
+    double operator()(int i, int j) const;
+    double trace() const { return xx + yy + zz; }
+    bool operator==(const SymmetricMatrix3&) const = default;
+};
+
 struct VoxelStats {
     std::uint64_t count = 0;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     /// Scatter matrix M2 = sum_i (p_i - mean)(p_i - mean)^T.
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    SymmetricMatrix3 scatter;
 
     /// Adds one point (Welford's update; stable far from the origin).
     void add(const Eigen::Vector3d& p);

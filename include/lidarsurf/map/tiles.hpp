@@ -35,6 +35,7 @@
 
 namespace lidarsurf {
 
+class Reconstructor;
 struct ReconstructionSummary;
 
 struct TileConfig {
@@ -114,6 +115,12 @@ private:
 /// world frame. `summary`, when given, gets the tile's counts and times.
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
                ReconstructionSummary* summary = nullptr);
+
+/// The mesh of the cubes `tile` owns, from `rec`'s grid (world frame), which must hold every point
+/// of the tile's dependency box that `plan`'s scans have: the tile's own Reconstructor
+/// (fuse_tile), or one map fused whole and then meshed tile by tile, so that its mesh is written
+/// piece by piece. Empty when the grid has nothing within reach of the tile.
+Mesh mesh_tile(Reconstructor& rec, const TilePlan& plan, const TileKey& tile);
 
 /// Joins tile meshes written one after the other into one mesh: a vertex on a tile's border that
 /// an earlier tile wrote (the same position and attributes, to the bit) is not written again.

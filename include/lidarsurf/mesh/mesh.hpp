@@ -21,6 +21,9 @@ struct Mesh {
     void check() const;
     /// Area of triangle `i`, m^2 (half the norm of the edge cross product).
     double triangle_area(std::size_t i) const;
+    /// Appends `part`: its vertices (with their attributes) after this mesh's, its triangles
+    /// renumbered to them. Shared vertices are not merged.
+    void append(const Mesh& part);
 };
 
 }  // namespace lidarsurf
