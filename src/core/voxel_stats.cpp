@@ -2,11 +2,6 @@
 
 namespace lidarsurf {
 
-double SymmetricMatrix3::operator()(int i, int j) const {
-    const double m[3][3] = {{xx, xy, xz}, {xy, yy, yz}, {xz, yz, zz}};
-    return m[i][j];
-}
-
 void VoxelStats::add(const Eigen::Vector3d& p) {
     // Welford: mean_n = mean_{n-1} + (p - mean_{n-1}) / n ; M2 += (p - mean_{n-1})(p - mean_n)^T,
     // whose upper triangle is kept (the product is symmetric up to rounding).

@@ -19,8 +19,6 @@ struct SymmetricMatrix3 {
         m << xx, xy, xz, xy, yy, yz, xz, yz, zz;
         return m;
     }
-    double operator()(int i, int j) const;
-    double trace() const { return xx + yy + zz; }
     bool operator==(const SymmetricMatrix3&) const = default;
 };
 
