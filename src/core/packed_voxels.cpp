@@ -70,15 +70,14 @@ void PackedVoxels::pack(std::size_t b) const {
     block.occupancy = &grid.occupancy(in_grid(b));
     block.layers = 0;
     for (int z = 0; z < 8; ++z) block.layers |= static_cast<std::uint8_t>(((*block.occupancy)[static_cast<std::size_t>(z)] != 0) << z);
-    const auto& index = grid.index().block_at(in_grid(b));
+    const std::span<const std::int32_t> index = grid.block_voxels(in_grid(b));
     Voxel* out = voxels_.get() + start_[b];
     int rank = 0;
     for (int row = 0; row < 64; ++row) {
         block.row_start[static_cast<std::size_t>(row)] = static_cast<std::uint16_t>(rank);
         const std::uint64_t byte = ((*block.occupancy)[static_cast<std::size_t>(row >> 3)] >> (8 * (row & 7))) & 0xffu;
         for (std::uint64_t bits = byte; bits; bits &= bits - 1, ++rank) {
-            const int offset = std::countr_zero(bits) | (row << 3);
-            const VoxelStats& s = grid.stats()[static_cast<std::size_t>(index[static_cast<std::size_t>(offset)])];
+            const VoxelStats& s = grid.stats()[static_cast<std::size_t>(index[static_cast<std::size_t>(rank)])];
             const SymmetricMatrix3& m = s.scatter;
             out[rank] = {static_cast<double>(s.count), s.mean.x(), s.mean.y(), s.mean.z(), m.xx, m.xy, m.xz, m.yy, m.yz, m.zz};
         }

@@ -61,16 +61,29 @@ void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
     origin_set_ = true;
 }
 
+void VoxelGrid::Slots::insert(int layer, std::uint64_t word, int bit, std::int32_t voxel) {
+    const auto rank = static_cast<std::ptrdiff_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit));
+    voxels.insert(voxels.begin() + rank, voxel);
+    for (std::size_t l = static_cast<std::size_t>(layer) + 1; l < before.size(); ++l) ++before[l];
+}
+
+void VoxelGrid::Slots::erase(int layer, std::uint64_t word, int bit) {
+    const auto rank = static_cast<std::ptrdiff_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit));
+    voxels.erase(voxels.begin() + rank);
+    for (std::size_t l = static_cast<std::size_t>(layer) + 1; l < before.size(); ++l) --before[l];
+}
+
 void VoxelGrid::cache_block(const VoxelKey& block_key) {
-    const std::uint32_t b = index_.block_index(block_key);
+    const std::uint32_t b = index_.add(block_key).first;
     if (b >= occupancy_.size()) {
         occupancy_.resize(b + 1, Occupancy{});
+        slots_.resize(b + 1);
         touched_flag_.resize(b + 1, 0);
     }
     // Every point goes through here or through the cached block, which was marked when it was
     // cached (clear_touched() drops the cache).
     touch(b);
-    last_block_ = &index_.block_at(b);
+    last_block_ = &slots_[b];
     last_occupancy_ = &occupancy_[b];
     last_block_key_ = block_key;
 }
@@ -107,17 +120,21 @@ void VoxelGrid::touch(std::uint32_t b) {
     }
 }
 
+std::int32_t& VoxelGrid::slot_of(const VoxelKey& key) {
+    using Map = BlockMap<std::int32_t>;
+    const auto b = static_cast<std::size_t>(index_.index_of(Map::block_of(key)));
+    const int offset = Map::offset_of(key);
+    return slots_[b].at(offset >> 6, occupancy_[b][static_cast<std::size_t>(offset >> 6)], offset & 63);
+}
+
 std::size_t VoxelGrid::remove(std::size_t voxel) {
     using Map = BlockMap<std::int32_t>;
-    const auto slot_of = [&](const VoxelKey& key) -> std::pair<std::int32_t*, std::uint32_t> {
-        const auto b = static_cast<std::uint32_t>(index_.index_of(Map::block_of(key)));
-        return {&index_.block_at(b)[static_cast<std::size_t>(Map::offset_of(key))], b};
-    };
     const VoxelKey key = keys_.at(voxel);
-    const auto [slot, block] = slot_of(key);
+    const auto block = static_cast<std::uint32_t>(index_.index_of(Map::block_of(key)));
     const int offset = Map::offset_of(key);
-    *slot = -1;
-    occupancy_[block][static_cast<std::size_t>(offset >> 6)] &= ~(std::uint64_t{1} << (offset & 63));
+    std::uint64_t& word = occupancy_[block][static_cast<std::size_t>(offset >> 6)];
+    slots_[block].erase(offset >> 6, word, offset & 63);
+    word &= ~(std::uint64_t{1} << (offset & 63));
     touch(block);
     if (tracking_) {
         BlockChange& c = change_of(block);
@@ -126,7 +143,7 @@ std::size_t VoxelGrid::remove(std::size_t voxel) {
     }
     const std::size_t last = keys_.size() - 1;
     if (voxel != last) {
-        *slot_of(keys_[last]).first = static_cast<std::int32_t>(voxel);
+        slot_of(keys_[last]) = static_cast<std::int32_t>(voxel);
         keys_[voxel] = keys_[last];
         stats_[voxel] = stats_[last];
         if (viewpoints_enabled_) viewpoint_means_[voxel] = viewpoint_means_[last];
@@ -141,13 +158,14 @@ std::int32_t VoxelGrid::voxel_index_slow(const VoxelKey& key) {
     const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
     if (!last_block_ || !same_key(block_key, last_block_key_)) cache_block(block_key);
     const int offset = BlockMap<std::int32_t>::offset_of(key);
-    std::int32_t& slot = (*last_block_)[static_cast<std::size_t>(offset)];
-    if (slot < 0) {
-        (*last_occupancy_)[static_cast<std::size_t>(offset >> 6)] |= std::uint64_t{1} << (offset & 63);
-        slot = static_cast<std::int32_t>(keys_.size());
-        keys_.push_back(key);
-    }
-    return slot;
+    std::uint64_t& word = (*last_occupancy_)[static_cast<std::size_t>(offset >> 6)];
+    const std::uint64_t flag = std::uint64_t{1} << (offset & 63);
+    if (word & flag) return last_block_->at(offset >> 6, word, offset & 63);
+    const auto voxel = static_cast<std::int32_t>(keys_.size());
+    last_block_->insert(offset >> 6, word, offset & 63, voxel);
+    word |= flag;
+    keys_.push_back(key);
+    return voxel;
 }
 
 void VoxelGrid::insert(const Eigen::Vector3d& world) {
@@ -208,14 +226,9 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     const std::size_t voxels_before = keys_.size();
     // 2. The voxel of every point, in point order: new voxels are numbered as one-by-one
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).
-    //    Without a branch on whether the voxel is new (as likely as not on a lidar frame, so
-    //    mispredicted half the time): each point's key is written at the end of keys_, which
-    //    keeps it only if the voxel was new, and its occupancy bit is set either way.
     std::vector<std::uint32_t> voxel(n, kSkip);
     std::size_t dropped = 0;
     std::size_t count = keys_.size();
-    keys_.resize(count + n);  // room for every point's voxel being new; cut to `count` below
-    VoxelKey* const numbered = keys_.data();
     for (std::size_t i = 0; i < n; ++i) {
         if (!finite[i]) [[unlikely]] {
             ++dropped;
@@ -225,16 +238,20 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
         const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
         if (!last_block_ || !same_key(block_key, last_block_key_)) cache_block(block_key);
         const int offset = BlockMap<std::int32_t>::offset_of(key);
-        std::int32_t& slot = (*last_block_)[static_cast<std::size_t>(offset)];
-        const std::int32_t old = slot;
-        const std::int32_t index = old < 0 ? static_cast<std::int32_t>(count) : old;
-        slot = index;
-        numbered[count] = key;
-        count += old < 0;
-        (*last_occupancy_)[static_cast<std::size_t>(offset >> 6)] |= std::uint64_t{1} << (offset & 63);
+        const int layer = offset >> 6, bit = offset & 63;
+        std::uint64_t& word = (*last_occupancy_)[static_cast<std::size_t>(layer)];
+        std::int32_t index;
+        if ((word >> bit) & 1u) {
+            index = last_block_->at(layer, word, bit);
+        } else {
+            index = static_cast<std::int32_t>(count);
+            last_block_->insert(layer, word, bit, index);
+            word |= std::uint64_t{1} << bit;
+            keys_.push_back(key);
+            ++count;
+        }
         voxel[i] = static_cast<std::uint32_t>(index);
     }
-    keys_.resize(count);
     stats_.resize(keys_.size());  // the new voxels, empty
     // 3. The points of each voxel, in point order, then Welford's update per voxel in parallel:
     //    each voxel sees its points in the order one-by-one insertion gives it, so the statistics
@@ -337,7 +354,9 @@ void VoxelGrid::clear_touched() {
 }
 
 std::size_t VoxelGrid::memory_bytes() const {
-    return index_.memory_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
+    std::size_t slots = slots_.capacity() * sizeof(Slots);
+    for (const Slots& b : slots_) slots += b.voxels.capacity() * sizeof(std::int32_t);
+    return index_.memory_bytes() + slots + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
            keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t) +
            viewpoint_means_.capacity() * sizeof(Eigen::Vector3f);
 }
@@ -373,18 +392,32 @@ std::size_t VoxelGrid::memory_bytes_after(std::size_t new_voxels, std::size_t ne
     // (std::vector's growth); the block index by the blocks' pages and its hash, likewise.
     const auto grown = [](std::size_t capacity, std::size_t needed) { return needed <= capacity ? capacity : std::max(2 * capacity, needed); };
     const std::size_t voxels = keys_.size() + new_voxels, blocks = occupancy_.size() + new_blocks;
-    std::size_t bytes = grown(keys_.capacity(), keys_.size() + batch) * sizeof(VoxelKey);  // the insert's room for every point
+    std::size_t bytes = grown(keys_.capacity(), voxels) * sizeof(VoxelKey);
     bytes += grown(stats_.capacity(), voxels) * sizeof(VoxelStats);
     if (viewpoints_enabled_) bytes += grown(viewpoint_means_.capacity(), voxels) * sizeof(Eigen::Vector3f);
     bytes += grown(occupancy_.capacity(), blocks) * sizeof(Occupancy) + grown(touched_flag_.capacity(), blocks) +
              grown(touched_.capacity(), blocks) * sizeof(std::uint32_t);
-    bytes += 2 * index_.memory_bytes() + new_blocks * (sizeof(BlockMap<std::int32_t>::Block) + 64) + 32 * sizeof(BlockMap<std::int32_t>::Block);
+    // The blocks' voxel lists grow by doubling: up to twice the new voxels' indices.
+    bytes += grown(slots_.capacity(), blocks) * sizeof(Slots) + 2 * new_voxels * sizeof(std::int32_t);
+    for (const Slots& b : slots_) bytes += b.voxels.capacity() * sizeof(std::int32_t);
+    bytes += 2 * index_.memory_bytes() + new_blocks * 64;
+    // The insert's scratch per point: its key, finiteness, voxel, place in the grouping and run.
+    bytes += batch * (sizeof(VoxelKey) + 1 + 2 * sizeof(std::uint32_t) + sizeof(std::size_t));
     return bytes;
 }
 
+std::int32_t VoxelGrid::voxel_at(const VoxelKey& key) const {
+    using Map = BlockMap<std::int32_t>;
+    const std::int64_t b = index_.index_of(Map::block_of(key));
+    if (b < 0) return -1;
+    const int offset = Map::offset_of(key);
+    const std::uint64_t word = occupancy_[static_cast<std::size_t>(b)][static_cast<std::size_t>(offset >> 6)];
+    return (word >> (offset & 63)) & 1u ? slots_[static_cast<std::size_t>(b)].at(offset >> 6, word, offset & 63) : -1;
+}
+
 const VoxelStats* VoxelGrid::find(const VoxelKey& key) const {
-    const std::int32_t* slot = index_.find(key);
-    return slot && *slot >= 0 ? &stats_[static_cast<std::size_t>(*slot)] : nullptr;
+    const std::int32_t v = voxel_at(key);
+    return v >= 0 ? &stats_[static_cast<std::size_t>(v)] : nullptr;
 }
 
 }  // namespace lidarsurf

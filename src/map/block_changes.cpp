@@ -43,7 +43,7 @@ void BlockChanges::record(const VoxelGrid& grid, const std::vector<VoxelGrid::Bl
 
 void BlockChanges::record_all(const VoxelGrid& grid) {
     std::vector<std::uint64_t> counts(grid.index().block_count(), 0);
-    const BlockMap<std::int32_t>& index = grid.index();
+    const BlockKeys& index = grid.index();
     for (std::size_t v = 0; v < grid.size(); ++v)
         counts[static_cast<std::size_t>(index.index_of(BlockMap<std::int32_t>::block_of(grid.keys()[v])))] += grid.stats()[v].count;
     std::vector<VoxelGrid::BlockChange> all;

@@ -151,9 +151,9 @@ bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, std::span<const Eigen::
     // return. A voxel on it (the ground beyond a grazing ray's return, seen before by a ring) is
     // not seen through; the rear of a car that drove on, a vertical surface, is.
     Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
-    const std::int32_t* slot = grid.index().find(grid.key_of_local(p));
-    if (slot && *slot >= 0 && evidence_[static_cast<std::size_t>(*slot)].shape == Shape::Planar) {
-        const Evidence& e = evidence_[static_cast<std::size_t>(*slot)];
+    const std::int32_t slot = grid.voxel_at(grid.key_of_local(p));
+    if (slot >= 0 && evidence_[static_cast<std::size_t>(slot)].shape == Shape::Planar) {
+        const Evidence& e = evidence_[static_cast<std::size_t>(slot)];
         n = Eigen::Vector3d(e.normal[0], e.normal[1], e.normal[2]);
     } else if (const auto image = image_normal(points, q)) {
         n = *image;
@@ -233,7 +233,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     const std::vector<float>& depth = depth_;
     using Map = BlockMap<std::int32_t>;
     constexpr int B = Map::kSize;
-    const Map& index = grid.index();
+    const BlockKeys& index = grid.index();
     const double reach = range_ + B * alpha;  // block centres: the range plus half a block's diagonal
     tbb::enumerable_thread_specific<std::vector<std::uint32_t>> passed;
     tbb::enumerable_thread_specific<std::size_t> crossings(0);
@@ -278,13 +278,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
             const Eigen::Vector3d centre = (block_keys[b].cast<double>() + Eigen::Vector3d::Constant(0.5)) * (B * alpha);
             if ((centre - s).squaredNorm() > reach * reach) continue;
-            const VoxelGrid::Occupancy& occupied = grid.occupancy(b);
-            const Map::Block& block = index.block_at(b);
-            for (int layer = 0; layer < B; ++layer)
-                for (std::uint64_t bits = occupied[static_cast<std::size_t>(layer)]; bits; bits &= bits - 1) {
-                    const int bit = std::countr_zero(bits);
-                    test(static_cast<std::uint32_t>(block[static_cast<std::size_t>(bit | layer << 6)]), range_, mine, tested);
-                }
+            for (const std::int32_t v : grid.block_voxels(b)) test(static_cast<std::uint32_t>(v), range_, mine, tested);
         }
     });
     // 2b. Beyond the range, the young voxels only (at most kYoungHits scans hit them): a moving
@@ -302,9 +296,9 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     for (const VoxelKey& key : young_) {
         const Eigen::Vector3d centre = (key.cast<double>() + Eigen::Vector3d::Constant(0.5)) * alpha;
         if ((centre - s).squaredNorm() > keep * keep) continue;
-        const std::int32_t* slot = index.find(key);
-        if (!slot || *slot < 0 || static_cast<std::size_t>(*slot) >= before || evidence_[static_cast<std::size_t>(*slot)].hits > kYoungHits) continue;
-        young_slots_.push_back(static_cast<std::uint32_t>(*slot));
+        const std::int32_t slot = grid.voxel_at(key);
+        if (slot < 0 || static_cast<std::size_t>(slot) >= before || evidence_[static_cast<std::size_t>(slot)].hits > kYoungHits) continue;
+        young_slots_.push_back(static_cast<std::uint32_t>(slot));
         young_[kept++] = key;
     }
     young_.resize(kept);

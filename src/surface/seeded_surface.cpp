@@ -542,7 +542,7 @@ struct DirtyRegion {
 };
 DirtyRegion dirty_region(const VoxelGrid& grid, int reach) {
     DirtyRegion d;
-    const BlockMap<std::int32_t>& index = grid.index();
+    const BlockKeys& index = grid.index();
     d.eager_blocks.assign(index.block_count(), 0);
     for (std::uint32_t b : grid.touched_blocks()) {
         const VoxelKey key = index.block_keys()[b];

@@ -214,19 +214,40 @@ TEST(BlockMap, UnfilledBlocksAreFilledWithTheEmptyValue) {
 }
 
 TEST(VoxelGrid, OccupancyBitsMatchTheIndex) {
+    // The oracle: a map from each inserted point's key to the statistics of its points, built here.
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(-3.0, 3.0);
-    VoxelGrid grid(0.2);
-    for (int i = 0; i < 3000; ++i) grid.insert({u(rng), u(rng), 0.2 * u(rng)});
+    const double alpha = 0.2;
+    VoxelGrid grid(alpha, Eigen::Vector3d::Zero());
+    std::map<std::array<int, 3>, std::size_t> points_of;
+    for (int i = 0; i < 3000; ++i) {
+        const Eigen::Vector3d p{u(rng), u(rng), 0.2 * u(rng)};
+        grid.insert(p);
+        ++points_of[{static_cast<int>(std::floor(p.x() / alpha)), static_cast<int>(std::floor(p.y() / alpha)),
+                     static_cast<int>(std::floor(p.z() / alpha))}];
+    }
+    ASSERT_EQ(grid.size(), points_of.size());
     std::size_t occupied = 0;
     for (std::size_t b = 0; b < grid.index().block_count(); ++b) {
-        const auto& block = grid.index().block_at(b);
         const auto& occ = grid.occupancy(b);
+        const VoxelKey block = grid.index().block_keys()[b];
+        std::vector<std::int32_t> in_bit_order;
         for (int o = 0; o < BlockMap<std::int32_t>::kVolume; ++o) {
+            const VoxelKey key = BlockMap<std::int32_t>::key_at(block, o);
             const bool bit = (occ[static_cast<std::size_t>(o >> 6)] >> (o & 63)) & 1u;
-            EXPECT_EQ(bit, block[static_cast<std::size_t>(o)] >= 0) << "block " << b << " offset " << o;
-            occupied += bit;
+            const auto it = points_of.find({key.x(), key.y(), key.z()});
+            EXPECT_EQ(bit, it != points_of.end()) << "block " << b << " offset " << o;
+            const std::int32_t v = grid.voxel_at(key);
+            EXPECT_EQ(bit, v >= 0) << "block " << b << " offset " << o;
+            if (!bit) continue;
+            ++occupied;
+            in_bit_order.push_back(v);
+            ASSERT_LT(static_cast<std::size_t>(v), grid.size());
+            EXPECT_TRUE(same_key(grid.keys()[static_cast<std::size_t>(v)], key));
+            EXPECT_EQ(grid.stats()[static_cast<std::size_t>(v)].count, it->second);
         }
+        const auto listed = grid.block_voxels(b);
+        EXPECT_EQ(std::vector<std::int32_t>(listed.begin(), listed.end()), in_bit_order) << "block " << b;
     }
     EXPECT_EQ(occupied, grid.size());
 }

@@ -117,6 +117,38 @@ private:
     VoxelKey box_size_ = VoxelKey::Zero();
 };
 
+/// Block keys numbered in creation order (0, 1, ...), found through a BlockIndex: the bookkeeping
+/// of a map of blocks, whatever each block holds.
+class BlockKeys {
+public:
+    /// Creation index of `block`, or -1.
+    std::int64_t index_of(const VoxelKey& block) const {
+        const std::uint32_t i = index_.find(block);
+        return i == BlockIndex::kAbsent ? -1 : static_cast<std::int64_t>(i);
+    }
+    /// Creation index of `block`, numbering it next if absent; .second tells whether it was.
+    std::pair<std::uint32_t, bool> add(const VoxelKey& block) {
+        const auto added = index_.try_emplace(block, static_cast<std::uint32_t>(keys_.size()));
+        if (added.second) keys_.push_back(block);
+        return added;
+    }
+    std::size_t block_count() const { return keys_.size(); }
+    /// Block keys in creation order.
+    const std::vector<VoxelKey>& block_keys() const { return keys_; }
+    /// Bytes held: the keys and the index.
+    std::size_t memory_bytes() const { return keys_.capacity() * sizeof(VoxelKey) + index_.memory_bytes(); }
+    /// Finds the keys of `box` through a dense table (BlockIndex::use_box). Only when empty.
+    void use_box(const BlockBox& box) { index_.use_box(box); }
+    void reserve(std::size_t n) {
+        index_.reserve(n);
+        keys_.reserve(n);
+    }
+
+private:
+    BlockIndex index_;
+    std::vector<VoxelKey> keys_;
+};
+
 template <typename T>
 class BlockMap {
 public:
@@ -151,12 +183,12 @@ public:
 
     /// The block with key `block`, or nullptr.
     const Block* find_block(const VoxelKey& block) const {
-        const std::uint32_t i = index_.find(block);
-        return i == BlockIndex::kAbsent ? nullptr : blocks_[i];
+        const std::int64_t i = keys_.index_of(block);
+        return i < 0 ? nullptr : blocks_[static_cast<std::size_t>(i)];
     }
     Block* find_block(const VoxelKey& block) {
-        const std::uint32_t i = index_.find(block);
-        return i == BlockIndex::kAbsent ? nullptr : blocks_[i];
+        const std::int64_t i = keys_.index_of(block);
+        return i < 0 ? nullptr : blocks_[static_cast<std::size_t>(i)];
     }
     /// The block with key `block`, created (filled with the empty value) if absent.
     Block& block(const VoxelKey& block) { return *blocks_[block_index(block)]; }
@@ -169,11 +201,8 @@ public:
     /// As block_index(), but a block it creates (.second true) holds garbage until fill_block():
     /// for creating many blocks (serial) and filling them in parallel.
     std::pair<std::uint32_t, bool> block_index_unfilled(const VoxelKey& block) {
-        const auto [i, added] = index_.try_emplace(block, static_cast<std::uint32_t>(blocks_.size()));
-        if (added) {
-            blocks_.push_back(new_block());
-            block_keys_.push_back(block);
-        }
+        const auto [i, added] = keys_.add(block);
+        if (added) blocks_.push_back(new_block());
         return {i, added};
     }
     /// Fills block i with the empty value (block_index_unfilled).
@@ -191,26 +220,22 @@ public:
     /// Bytes held by the map: the blocks' pages, their pointers, keys and index.
     std::size_t memory_bytes() const {
         return pages_.size() * (kPageBlocks * sizeof(Block) + 16) + (blocks_.capacity() + pages_.capacity()) * sizeof(void*) +
-               block_keys_.capacity() * sizeof(VoxelKey) + index_.memory_bytes();
+               keys_.memory_bytes();
     }
     /// Block keys in creation order; block i of block_at(i).
-    const std::vector<VoxelKey>& block_keys() const { return block_keys_; }
+    const std::vector<VoxelKey>& block_keys() const { return keys_.block_keys(); }
     const Block& block_at(std::size_t i) const { return *blocks_[i]; }
     Block& block_at(std::size_t i) { return *blocks_[i]; }
     /// Creation index of a block key, or -1.
-    std::int64_t index_of(const VoxelKey& block) const {
-        const std::uint32_t i = index_.find(block);
-        return i == BlockIndex::kAbsent ? -1 : static_cast<std::int64_t>(i);
-    }
+    std::int64_t index_of(const VoxelKey& block) const { return keys_.index_of(block); }
     const T& empty_value() const { return empty_; }
 
     /// Finds the blocks of `box` through a dense table (BlockIndex::use_box): for a map whose
     /// blocks are known to lie mostly in a box (those of one frame). Only on an empty map.
-    void use_box(const BlockBox& box) { index_.use_box(box); }
+    void use_box(const BlockBox& box) { keys_.use_box(box); }
     void reserve_blocks(std::size_t n) {
-        index_.reserve(n);
+        keys_.reserve(n);
         blocks_.reserve(n);
-        block_keys_.reserve(n);
     }
 
     /// Read access that remembers the last existing block looked up (blocks never move, so it
@@ -313,7 +338,7 @@ public:
 
 private:
     T empty_;
-    BlockIndex index_;
+    BlockKeys keys_;
     // Blocks are allocated kPageBlocks at a time (one allocation instead of one per block: block
     // creation is a serial step of the surface search); a page's blocks are filled when handed out.
     static constexpr std::size_t kPageBlocks = 32;
@@ -327,7 +352,6 @@ private:
     std::vector<Block*> blocks_;
     std::vector<std::unique_ptr<Block[]>> pages_;
     std::size_t page_free_ = 0;
-    std::vector<VoxelKey> block_keys_;
 };
 
 }  // namespace lidarsurf
