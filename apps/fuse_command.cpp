@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "allocator_tuning.hpp"
 #include "commands.hpp"
 #include "file_roles.hpp"
 #include "interrupt.hpp"
@@ -268,6 +269,9 @@ int run_fuse(const FuseOptions& o) {
         per_frame.push_back(std::move(row));
     }
     progress.finish(std::to_string(rec.summary().voxels) + " voxels");
+    // The scans' scratch and the old copies of the map's grown arrays, freed but kept by the
+    // allocator's tuning for the next scan, go back before the final mesh, whose peak is the run's.
+    release_free_memory();
     const auto t0 = std::chrono::steady_clock::now();
     ReconstructionSummary s;
     if (by_squares) {
