@@ -33,12 +33,16 @@ demo: build
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-# The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (second build directory),
-# with the portable scalar sums (LIDARSURF_SCALAR) where the main build has the SSE2 ones.
+# The suite under AddressSanitizer + UndefinedBehaviorSanitizer (second build directory), with
+# the portable scalar sums (LIDARSURF_SCALAR) where the main build has the SSE2 ones. Left out:
+# the tests that run code the others run on more data (accuracy claims, fast path against
+# reference path on whole frames, one of two live-mesh dependency settings): 380 of the suite's
+# 1,830 test-seconds under ASan. ASAN_EXCLUDE= runs everything.
+ASAN_EXCLUDE ?= ^(SeededSurface\.FastPathGivesTheReferenceMesh(InEveryMode|WithDilatedSeeds)|Benchmark\.PaperClaimsHoldOnATownFrame|Pipeline\.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo|Reach/LiveMeshReach\.WhatTheCarLeftIsGoneFromTheLiveMesh/EveryDependency)
 sanitize: setup
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_SCALAR=ON -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
-	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(JOBS) $(if $(ASAN_EXCLUDE),-E '$(ASAN_EXCLUDE)')
 
 # The parallel code under ThreadSanitizer (third build directory): the tests whose code runs TBB
 # loops (surface search, reference TSDF, free-space carving, IMLS, metrics, map metrics, simulator,
@@ -50,7 +54,7 @@ sanitize: setup
 # (about 4 minutes under TSan).
 TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*:LiveFeed.*:LiveServer.*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo$\
-:FreeSpace.AWalkersPathInFrontOfTheWallIsMostlyCarved:FreeSpace.TheMeshLosesTheTrailAndASingleScanIsUnchanged:FreeSpace.IncrementalMeshesEqualTheOnePassMesh$\
+:FreeSpace.AWalkersPathInFrontOfTheWallIsMostlyCarved:FreeSpace.TheMeshLosesTheTrailAndASingleScanIsUnchanged:FreeSpace.IncrementalMeshesEqualTheOnePassMesh:FreeSpace.ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays$\
 :Pipeline.ASequenceOrientsEachSideTowardTheSensorThatSawIt:Pipeline.IncrementalExtractionGivesTheMeshOfOneExtraction:Pipeline.ATownDriveFusedFrameByFrameGivesTheOnePassMesh
 tsan:
 	@bash scripts/setup.sh tsan
