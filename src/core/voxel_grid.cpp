@@ -353,10 +353,14 @@ void VoxelGrid::clear_touched() {
     last_block_ = nullptr;  // so that the next point in the cached block marks it again
 }
 
+std::size_t VoxelGrid::slot_bytes() const {
+    std::size_t bytes = 0;
+    for (const Slots& b : slots_) bytes += b.voxels.capacity() * sizeof(std::int32_t);
+    return bytes;
+}
+
 std::size_t VoxelGrid::memory_bytes() const {
-    std::size_t slots = slots_.capacity() * sizeof(Slots);
-    for (const Slots& b : slots_) slots += b.voxels.capacity() * sizeof(std::int32_t);
-    return index_.memory_bytes() + slots + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
+    return index_.memory_bytes() + slots_.capacity() * sizeof(Slots) + slot_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
            keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t) +
            viewpoint_means_.capacity() * sizeof(Eigen::Vector3f);
 }
@@ -398,8 +402,7 @@ std::size_t VoxelGrid::memory_bytes_after(std::size_t new_voxels, std::size_t ne
     bytes += grown(occupancy_.capacity(), blocks) * sizeof(Occupancy) + grown(touched_flag_.capacity(), blocks) +
              grown(touched_.capacity(), blocks) * sizeof(std::uint32_t);
     // The blocks' voxel lists grow by doubling: up to twice the new voxels' indices.
-    bytes += grown(slots_.capacity(), blocks) * sizeof(Slots) + 2 * new_voxels * sizeof(std::int32_t);
-    for (const Slots& b : slots_) bytes += b.voxels.capacity() * sizeof(std::int32_t);
+    bytes += grown(slots_.capacity(), blocks) * sizeof(Slots) + slot_bytes() + 2 * new_voxels * sizeof(std::int32_t);
     bytes += 2 * index_.memory_bytes() + new_blocks * 64;
     // The insert's scratch per point: its key, finiteness, voxel, place in the grouping and run.
     bytes += batch * (sizeof(VoxelKey) + 1 + 2 * sizeof(std::uint32_t) + sizeof(std::size_t));

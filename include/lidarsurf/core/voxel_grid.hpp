@@ -196,7 +196,7 @@ private:
             return voxels[static_cast<std::size_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit))];
         }
         std::int32_t& at(int layer, std::uint64_t word, int bit) {
-            return voxels[static_cast<std::size_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit))];
+            return const_cast<std::int32_t&>(std::as_const(voxels)[static_cast<std::size_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit))]);
         }
         // A voxel for the free bit `bit` of layer `layer` (occupancy word `word` before it is set).
         void insert(int layer, std::uint64_t word, int bit, std::int32_t voxel);
@@ -205,6 +205,8 @@ private:
     };
     // The slot of the occupied voxel `key`.
     std::int32_t& slot_of(const VoxelKey& key);
+    // Bytes held by the blocks' voxel lists (capacities).
+    std::size_t slot_bytes() const;
 
     double alpha_;
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
