@@ -62,14 +62,12 @@ void VoxelGrid::set_origin_from(const Eigen::Vector3d& world) {
 }
 
 void VoxelGrid::Slots::insert(int layer, std::uint64_t word, int bit, std::int32_t voxel) {
-    const auto rank = static_cast<std::ptrdiff_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit));
-    voxels.insert(voxels.begin() + rank, voxel);
+    voxels.insert(voxels.begin() + static_cast<std::ptrdiff_t>(rank(layer, word, bit)), voxel);
     for (std::size_t l = static_cast<std::size_t>(layer) + 1; l < before.size(); ++l) ++before[l];
 }
 
 void VoxelGrid::Slots::erase(int layer, std::uint64_t word, int bit) {
-    const auto rank = static_cast<std::ptrdiff_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit));
-    voxels.erase(voxels.begin() + rank);
+    voxels.erase(voxels.begin() + static_cast<std::ptrdiff_t>(rank(layer, word, bit)));
     for (std::size_t l = static_cast<std::size_t>(layer) + 1; l < before.size(); ++l) --before[l];
 }
 
@@ -228,29 +226,12 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
     //    insertion numbers them (this is the only serial pass: one block lookup per block change).
     std::vector<std::uint32_t> voxel(n, kSkip);
     std::size_t dropped = 0;
-    std::size_t count = keys_.size();
     for (std::size_t i = 0; i < n; ++i) {
         if (!finite[i]) [[unlikely]] {
             ++dropped;
             continue;
         }
-        const VoxelKey& key = keys[i];
-        const VoxelKey block_key = BlockMap<std::int32_t>::block_of(key);
-        if (!last_block_ || !same_key(block_key, last_block_key_)) cache_block(block_key);
-        const int offset = BlockMap<std::int32_t>::offset_of(key);
-        const int layer = offset >> 6, bit = offset & 63;
-        std::uint64_t& word = (*last_occupancy_)[static_cast<std::size_t>(layer)];
-        std::int32_t index;
-        if ((word >> bit) & 1u) {
-            index = last_block_->at(layer, word, bit);
-        } else {
-            index = static_cast<std::int32_t>(count);
-            last_block_->insert(layer, word, bit, index);
-            word |= std::uint64_t{1} << bit;
-            keys_.push_back(key);
-            ++count;
-        }
-        voxel[i] = static_cast<std::uint32_t>(index);
+        voxel[i] = static_cast<std::uint32_t>(voxel_index(keys[i]));
     }
     stats_.resize(keys_.size());  // the new voxels, empty
     // 3. The points of each voxel, in point order, then Welford's update per voxel in parallel:

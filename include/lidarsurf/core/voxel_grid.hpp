@@ -191,13 +191,13 @@ private:
     struct Slots {
         std::vector<std::int32_t> voxels;
         std::array<std::uint16_t, 8> before{};
-        // The voxel at bit `bit` of layer `layer`, whose occupancy word is `word` (bit set).
-        std::int32_t at(int layer, std::uint64_t word, int bit) const {
-            return voxels[static_cast<std::size_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit))];
+        // The place in `voxels` of bit `bit` of layer `layer`, whose occupancy word is `word`.
+        std::size_t rank(int layer, std::uint64_t word, int bit) const {
+            return static_cast<std::size_t>(before[static_cast<std::size_t>(layer)]) + static_cast<std::size_t>(bits_below(word, bit));
         }
-        std::int32_t& at(int layer, std::uint64_t word, int bit) {
-            return const_cast<std::int32_t&>(std::as_const(voxels)[static_cast<std::size_t>(before[static_cast<std::size_t>(layer)] + bits_below(word, bit))]);
-        }
+        // The voxel at bit `bit` of layer `layer` (bit set in `word`).
+        std::int32_t at(int layer, std::uint64_t word, int bit) const { return voxels[rank(layer, word, bit)]; }
+        std::int32_t& at(int layer, std::uint64_t word, int bit) { return voxels[rank(layer, word, bit)]; }
         // A voxel for the free bit `bit` of layer `layer` (occupancy word `word` before it is set).
         void insert(int layer, std::uint64_t word, int bit, std::int32_t voxel);
         // Drops the voxel at the set bit `bit` of layer `layer` (word before it is cleared).
@@ -254,7 +254,7 @@ void VoxelGrid::for_each_index_in_box(const VoxelKey& lo, const VoxelKey& hi, F&
                     if (!bits) continue;
                     // The layer's voxels from the first one in the box, ranked as they come.
                     const int first = std::countr_zero(bits);
-                    std::size_t rank = block.before[static_cast<std::size_t>(z & m)] + static_cast<std::size_t>(bits_below(word, first));
+                    std::size_t rank = block.rank(z & m, word, first);
                     for (std::uint64_t all = word >> first << first; bits; all &= all - 1, ++rank) {
                         const int bit = std::countr_zero(all);
                         if (!((bits >> bit) & 1u)) continue;
