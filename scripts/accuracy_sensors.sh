@@ -3,7 +3,9 @@
 # off-road scene, the same frames for every method, within 30 m of the sensor, against the true
 # surface. Rows: lidarsurf's default, the paper's AN+GC as written and, when installed, the peers
 # (Open3D's alpha shape and Poisson from Debian's python3-open3d; PCL's MLS + greedy projection
-# when PCL_PEER names tools/pcl_peer's binary, `make accuracy-pcl` builds it).
+# when PCL_PEER names tools/pcl_peer's binary, `make accuracy-pcl` builds it; VDBFusion on each scan
+# alone when VDBFUSION_PEER names tools/vdbfusion_peer's binary, `make map-peers` builds it: its KITTI
+# settings, 0.1 m voxels, 0.3 m truncation, min weight 5, and the same without the weight filter).
 #   scripts/accuracy_sensors.sh CLI OUT
 # Environment: SEED (21), FRAMES (3), SENSORS, SCENES, METHODS (benchmark rows), O3D_METHODS.
 # Prints the markdown table and writes OUT/sensors.json.
@@ -27,12 +29,16 @@ for scene in $scenes; do
         peers=()
         if [ "$have_open3d" = 1 ]; then
             [ -f "$seq/peers/done-o3d" ] || { /usr/bin/python3 "$here/peers_open3d.py" "$seq" --methods "$o3d_methods" >/dev/null && touch "$seq/peers/done-o3d"; }
-            peers=(--peers "$seq/peers")
         fi
         if [ -n "${PCL_PEER:-}" ] && [ ! -f "$seq/peers/done-pcl" ]; then
             "$PCL_PEER" "$seq" "$seq/peers" >/dev/null && touch "$seq/peers/done-pcl"
-            peers=(--peers "$seq/peers")
         fi
+        if [ -n "${VDBFUSION_PEER:-}" ] && [ ! -f "$seq/peers/done-vdbfusion" ]; then
+            "$VDBFUSION_PEER" "$seq" "$seq/peers/vdbfusion-kitti" --single-scans --frames "$frames" --voxel-size 0.1 --sdf-trunc 0.3 --min-weight 5 2>/dev/null
+            "$VDBFUSION_PEER" "$seq" "$seq/peers/vdbfusion-w0" --single-scans --frames "$frames" --voxel-size 0.1 --sdf-trunc 0.3 --min-weight 0 2>/dev/null
+            touch "$seq/peers/done-vdbfusion"
+        fi
+        [ -d "$seq/peers" ] && peers=(--peers "$seq/peers")
         "$cli" benchmark "$seq" --methods "$methods" "${peers[@]}" --max-range 30 --no-plots -q --out "$out/$scene-$sensor" >/dev/null
     done
 done
@@ -48,7 +54,9 @@ for scene, sensor in cols:
         table[(m["name"], scene, sensor)] = {"f": t["fscore"], "precision": t["precision"], "recall": t["recall"], "seconds": m["seconds"]}
 names = {"default": "**lidarsurf default**", "AN+GC kmax=5": "the paper's AN+GC, as written", "alpha-0.5": "Open3D alpha shape, α = 0.5 m",
          "poisson-d9": "Open3D Poisson, depth 9, 5 % trim", "poisson-d10": "Open3D Poisson, depth 10, 5 % trim",
-         "pcl-mls-gp": "PCL MLS + greedy projection"}
+         "pcl-mls-gp": "PCL MLS + greedy projection",
+         "vdbfusion-kitti": "VDBFusion, each scan alone, its KITTI settings (0.1 m, min weight 5)",
+         "vdbfusion-w0": "VDBFusion, each scan alone, 0.1 m, no weight filter"}
 print("| method | " + " | ".join(f"{s} {n}" for s, n in cols) + " |")
 print("|---" * (len(cols) + 1) + "|")
 for r in rows:

@@ -3,15 +3,21 @@
 // pipeline does (world-frame points, the sensor's position as the ray origin, constant weights),
 // then extracts its marching-cubes mesh. Writes the mesh and a report with the keys `lidarsurf map-benchmark`
 // reads from `lidarsurf fuse --json` (seconds.insert, per_frame[].integrate_ms).
+// With --single-scans, every frame is meshed alone in the sensor frame instead (the single-scan
+// peer of `lidarsurf benchmark --peers`): OUT is then a directory that receives NNNNNN.ply per
+// frame and times.txt ("frame seconds" lines, integration and extraction).
 // Built only by make map-peers (OpenVDB stays out of the default build and of make test).
 //
 // Usage: lidarsurf_vdbfusion_peer SEQ OUT.ply --json REPORT.json [--frames N] [--voxel-size 0.1]
 //        [--sdf-trunc 0.3] [--space-carving 0|1] [--min-weight 5]
+//        lidarsurf_vdbfusion_peer SEQ OUT_DIR --single-scans [--frames N] [same options]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <functional>
+#include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -31,6 +37,44 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+const std::function<float(float)> constant_weight = [](float) { return 1.0f; };
+
+lidarsurf::Mesh extract(const vdbfusion::VDBVolume& volume, float min_weight) {
+    const auto [vertices, triangles] = volume.ExtractTriangleMesh(true, min_weight);
+    lidarsurf::Mesh mesh;
+    mesh.vertices = vertices;
+    mesh.triangles.reserve(triangles.size());
+    for (const Eigen::Vector3i& t : triangles)
+        mesh.triangles.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2])});
+    return mesh;
+}
+
+// Each frame alone, in the sensor frame (the sensor at the origin), as a user meshing one scan
+// with VDBFusion would: OUT_DIR/NNNNNN.ply and OUT_DIR/times.txt. A frame that gives no triangle
+// writes no mesh (the benchmark scores it as an empty mesh).
+void mesh_single_scans(const lidarsurf::KittiSequence& seq, std::size_t n, const std::filesystem::path& out, float voxel_size,
+                       float sdf_trunc, bool space_carving, float min_weight) {
+    std::filesystem::create_directories(out);
+    std::ostringstream times;
+    for (std::size_t i = 0; i < n; ++i) {
+        lidarsurf::PointCloud cloud = lidarsurf::read_points(seq.scan(i));
+        std::vector<Eigen::Vector3d> points;
+        points.reserve(cloud.points.size());
+        for (const Eigen::Vector3d& p : cloud.points)
+            if (p.allFinite()) points.push_back(p);
+        const auto t0 = std::chrono::steady_clock::now();
+        vdbfusion::VDBVolume volume(voxel_size, sdf_trunc, space_carving);
+        volume.Integrate(points, Eigen::Vector3d(Eigen::Vector3d::Zero()), constant_weight);
+        const lidarsurf::Mesh mesh = extract(volume, min_weight);
+        times << i << " " << ms_since(t0) / 1e3 << "\n";
+        if (!mesh.triangles.empty()) lidarsurf::write_mesh(mesh, out / (lidarsurf::KittiSequence::frame_name(i) + ".ply"));
+        std::fprintf(stderr, "vdbfusion: frame %zu/%zu, %zu triangles\n", i + 1, n, mesh.triangles.size());
+    }
+    lidarsurf::AtomicFile file(out / "times.txt");
+    file.stream() << times.str();
+    file.commit();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -40,9 +84,11 @@ int main(int argc, char** argv) {
     // VDBFusion's own KITTI settings (examples/python/config/kitti.yaml upstream).
     float voxel_size = 0.1f, sdf_trunc = 0.3f, min_weight = 5.0f;
     int space_carving = 0;
+    bool single_scans = false;
     app.add_option("SEQ", dir, "Sequence directory (velodyne/, poses.txt)")->required();
-    app.add_option("OUT", out, "Output mesh (.ply)")->required();
-    app.add_option("--json", json, "Report: seconds by stage and per frame")->required();
+    app.add_option("OUT", out, "Output mesh (.ply), or with --single-scans the output directory")->required();
+    app.add_option("--json", json, "Report: seconds by stage and per frame (required without --single-scans)");
+    app.add_flag("--single-scans", single_scans, "Mesh every frame alone in the sensor frame: OUT/NNNNNN.ply and OUT/times.txt");
     app.add_option("--frames", frames, "Fuse the first N frames (0: all)");
     app.add_option("--voxel-size", voxel_size, "Voxel size, metres");
     app.add_option("--sdf-trunc", sdf_trunc, "Truncation distance, metres");
@@ -54,11 +100,15 @@ int main(int argc, char** argv) {
         const lidarsurf::KittiSequence seq{dir};
         std::size_t n = seq.frame_count();
         if (frames > 0) n = std::min(n, static_cast<std::size_t>(frames));
+        if (single_scans) {
+            mesh_single_scans(seq, n, out, voxel_size, sdf_trunc, space_carving != 0, min_weight);
+            return 0;
+        }
+        if (json.empty()) throw lidarsurf::InvalidArgument("--json is required (a fused map's report)");
         const std::vector<Eigen::Isometry3d> poses = lidarsurf::read_poses(seq.poses());
         if (poses.size() < n) throw lidarsurf::InvalidInput(seq.poses().string() + ": fewer poses than scans");
 
         vdbfusion::VDBVolume volume(voxel_size, sdf_trunc, space_carving != 0);
-        const std::function<float(float)> constant_weight = [](float) { return 1.0f; };
         double integrate_s = 0;
         nlohmann::json per_frame = nlohmann::json::array();
         for (std::size_t i = 0; i < n; ++i) {
@@ -76,13 +126,8 @@ int main(int argc, char** argv) {
             if ((i + 1) % 20 == 0 || i + 1 == n) std::fprintf(stderr, "vdbfusion: %zu/%zu frames\n", i + 1, n);
         }
         const auto t0 = std::chrono::steady_clock::now();
-        const auto [vertices, triangles] = volume.ExtractTriangleMesh(true, min_weight);
+        lidarsurf::Mesh mesh = extract(volume, min_weight);
         const double extract_s = ms_since(t0) / 1e3;
-        lidarsurf::Mesh mesh;
-        mesh.vertices = vertices;
-        mesh.triangles.reserve(triangles.size());
-        for (const Eigen::Vector3i& t : triangles)
-            mesh.triangles.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2])});
         if (mesh.triangles.empty()) throw lidarsurf::InvalidInput("VDBFusion gave an empty mesh");
         lidarsurf::write_mesh(mesh, out);
         const nlohmann::json j = {{"sequence", dir},
