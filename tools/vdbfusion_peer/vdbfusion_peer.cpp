@@ -51,7 +51,7 @@ lidarsurf::Mesh extract(const vdbfusion::VDBVolume& volume, float min_weight) {
 
 // Each frame alone, in the sensor frame (the sensor at the origin), as a user meshing one scan
 // with VDBFusion would: OUT_DIR/NNNNNN.ply and OUT_DIR/times.txt. A frame that gives no triangle
-// writes no mesh (the benchmark scores it as an empty mesh).
+// has no mesh file (the benchmark scores it as an empty mesh).
 void mesh_single_scans(const lidarsurf::KittiSequence& seq, std::size_t n, const std::filesystem::path& out, float voxel_size,
                        float sdf_trunc, bool space_carving, float min_weight) {
     std::filesystem::create_directories(out);
@@ -67,7 +67,11 @@ void mesh_single_scans(const lidarsurf::KittiSequence& seq, std::size_t n, const
         volume.Integrate(points, Eigen::Vector3d(Eigen::Vector3d::Zero()), constant_weight);
         const lidarsurf::Mesh mesh = extract(volume, min_weight);
         times << i << " " << ms_since(t0) / 1e3 << "\n";
-        if (!mesh.triangles.empty()) lidarsurf::write_mesh(mesh, out / (lidarsurf::KittiSequence::frame_name(i) + ".ply"));
+        const std::filesystem::path file = out / (lidarsurf::KittiSequence::frame_name(i) + ".ply");
+        if (!mesh.triangles.empty())
+            lidarsurf::write_mesh(mesh, file);
+        else
+            std::filesystem::remove(file);  // no mesh left from an earlier run: the frame scores empty
         std::fprintf(stderr, "vdbfusion: frame %zu/%zu, %zu triangles\n", i + 1, n, mesh.triangles.size());
     }
     lidarsurf::AtomicFile file(out / "times.txt");
