@@ -51,7 +51,9 @@ sanitize: setup
 # not instrumented, and TSan would report every hand-off between its threads as a race).
 # Left out: the slowest, which run the same parallel code on more data (the four largest, 290 s
 # under TSan), and the drives that repeat the carving and extraction other tests here run
-# (about 4 minutes under TSan).
+# (about 4 minutes under TSan). The TSan build compiles only the test files of these suites
+# (tests/CMakeLists.txt, LIDARSURF_TSAN_TEST_SOURCES); scripts/check_test_subset.sh checks that it
+# holds every test the filter selects in the full suite of $(BUILD).
 TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*:LiveFeed.*:LiveServer.*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo$\
 :FreeSpace.AWalkersPathInFrontOfTheWallIsMostlyCarved:FreeSpace.TheMeshLosesTheTrailAndASingleScanIsUnchanged:FreeSpace.IncrementalMeshesEqualTheOnePassMesh:FreeSpace.ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays$\
@@ -61,6 +63,7 @@ tsan:
 	bash scripts/build_tbb_tsan.sh $(TSAN_BUILD)/tbb
 	cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=thread -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF -DTBB_DIR=$(CURDIR)/$(TSAN_BUILD)/tbb/lib/cmake/TBB
 	cmake --build $(TSAN_BUILD) -j $(JOBS) --target lidarsurf_tests
+	bash scripts/check_test_subset.sh $(BUILD)/tests/lidarsurf_tests $(TSAN_BUILD)/tests/lidarsurf_tests '$(TSAN_FILTER)'
 	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/scripts/tsan.supp" $(TSAN_BUILD)/tests/lidarsurf_tests --gtest_filter='$(TSAN_FILTER)'
 
 # libFuzzer harnesses (clang, ASan+UBSan) run FUZZ_SECONDS each on fuzz/corpus/; see docs/reliability.md.
