@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <numeric>
 
 #include <tbb/task_arena.h>
 
@@ -207,7 +209,7 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
         throw InvalidArgument("min_component_triangles filters the whole map's components: not for a part of it");
     if (grid_.point_count() == 0) throw InvalidInput("the input has no points");
     const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
-    check_extraction_budget(config, Evaluation::Fast);  // the whole grid's: an upper bound for a region of it
+    check_extraction_budget(config, Evaluation::Fast, &region);
     tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
     Mesh mesh;
     arena.execute([&] {
@@ -222,9 +224,9 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
     return mesh;
 }
 
-void Reconstructor::check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation) {
+void Reconstructor::check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation, const SearchRegion* region) {
     const auto budget = static_cast<std::size_t>(budget_bytes());
-    summary_.memory_estimate = map_bytes() + estimate_extraction_bytes(grid_, config, evaluation, budget);
+    summary_.memory_estimate = map_bytes() + estimate_extraction_bytes(grid_, config, evaluation, budget, region);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
                                         format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
@@ -269,11 +271,31 @@ std::string Reconstructor::over_budget(const std::string& what, double bytes, co
 }
 
 std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
-                                      std::size_t limit) {
-    const std::size_t blocks = grid.index().block_count();
-    // Blocks the surface runs through (3+ voxels).
-    std::size_t surface_blocks = 0;
-    for (std::size_t b = 0; b < blocks; ++b) surface_blocks += popcount(grid.occupancy(b)) >= 3;
+                                      std::size_t limit, const SearchRegion* region) {
+    // The grid's blocks the extraction can reach: all of them, or those within the region's
+    // bounding box grown by the reach of a vertex's neighbourhoods (in blocks, rounded up, plus
+    // one for the region's cubes on a block's last layer).
+    const std::vector<VoxelKey>& keys = grid.index().block_keys();
+    std::vector<std::size_t> counted;
+    if (region) {
+        VoxelKey lo = VoxelKey::Constant(std::numeric_limits<int>::max()), hi = VoxelKey::Constant(std::numeric_limits<int>::min());
+        for (const VoxelKey& b : region->blocks()) lo = lo.cwiseMin(b), hi = hi.cwiseMax(b);
+        const int grow = (config.max_reach() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize + 1;
+        lo.array() -= grow, hi.array() += grow;
+        for (std::size_t b = 0; b < keys.size(); ++b)
+            if ((keys[b].array() >= lo.array()).all() && (keys[b].array() <= hi.array()).all()) counted.push_back(b);
+    } else {
+        counted.resize(keys.size());
+        std::iota(counted.begin(), counted.end(), std::size_t{0});
+    }
+    const std::size_t blocks = counted.size();
+    // Blocks the surface runs through (3+ voxels), and the voxels.
+    std::size_t surface_blocks = 0, voxels = 0;
+    for (const std::size_t b : counted) {
+        const int n = popcount(grid.occupancy(b));
+        surface_blocks += n >= 3;
+        voxels += static_cast<std::size_t>(n);
+    }
     // The output mesh: 40-64 vertices per surface block were measured (docs/reliability.md: a
     // KITTI frame, the demo, 3 M points on 40 planes at 0.05-0.2 m), each with its position,
     // normal, level and confidence (41 B) and about two triangles' share (24 B); bounded here by
@@ -284,7 +306,7 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
         // voxel block; surface blocks add the field, its samples and the welding table, about
         // 10 KiB more. Rounded up to 5 and 12 KiB. Plus the packed snapshot of the statistics
         // (PackedVoxels): one record per voxel and a header per block.
-        return mesh + blocks * 5 * 1024 + surface_blocks * 12 * 1024 + grid.size() * sizeof(PackedVoxels::Voxel) +
+        return mesh + blocks * 5 * 1024 + surface_blocks * 12 * 1024 + voxels * sizeof(PackedVoxels::Voxel) +
                blocks * sizeof(PackedVoxels::Block);
     }
     // Every vertex within the largest level L of a voxel is a candidate, each costing its key, its
@@ -294,11 +316,11 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
     const int r = (config.max_level() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize;
     BlockIndex dilated;
     std::size_t count = 0;
-    for (const VoxelKey& key : grid.index().block_keys())
+    for (const std::size_t b : counted)
         for (int z = -r; z <= r; ++z)
             for (int y = -r; y <= r; ++y)
                 for (int x = -r; x <= r; ++x) {
-                    if (!dilated.try_emplace(VoxelKey(key.x() + x, key.y() + y, key.z() + z), 0).second) continue;
+                    if (!dilated.try_emplace(VoxelKey(keys[b].x() + x, keys[b].y() + y, keys[b].z() + z), 0).second) continue;
                     if (mesh + ++count * kPerBlock > limit) return mesh + count * kPerBlock;
                 }
     return mesh + count * kPerBlock;

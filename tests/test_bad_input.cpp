@@ -222,3 +222,33 @@ TEST(BadInput, MemoryBudgetRefusesWithTheEstimate) {
     // The reference path dilates every voxel by k_max: its estimate is the larger one.
     EXPECT_GT(estimate_extraction_bytes(r.grid(), r.config(), Evaluation::Reference), static_cast<std::size_t>(extraction_mb * 1048576.0));
 }
+
+// A part of a map meshed apart (fuse's squares, tiles) is checked against what its search can
+// reach, not against the whole grid: a budget between the two meshes the part and refuses the
+// whole. A region holding every block counts what the whole grid counts.
+TEST(BadInput, MemoryBudgetOfAPartCountsThePart) {
+    // A road 400 m long and 4 m wide seen from 1.7 m above its start, a point every 10 cm.
+    PointCloud road;
+    for (int i = 0; i < 4000; ++i)
+        for (int j = 0; j < 40; ++j) road.points.emplace_back(0.1 * i, -2.0 + 0.1 * j, -1.7 + 0.002 * ((i * 7 + j * 3) % 5));
+    Reconstructor r(ReconstructionConfig{}, Eigen::Vector3d::Zero());
+    r.integrate(road);
+    const VoxelGrid& grid = r.grid();
+    const std::size_t whole = estimate_extraction_bytes(grid, r.config(), Evaluation::Fast);
+    const SearchRegion all = SearchRegion::around(grid.index().block_keys(), 0);
+    EXPECT_EQ(estimate_extraction_bytes(grid, r.config(), Evaluation::Fast, SIZE_MAX, &all), whole);
+    // The blocks of the road's first 10 m, and the cubes within 2 of them.
+    std::vector<VoxelKey> near;
+    for (const VoxelKey& b : grid.index().block_keys())
+        if (grid.to_world((b.cast<double>() * 8 + Eigen::Vector3d::Constant(4)) * grid.voxel_size()).x() < 10) near.push_back(b);
+    ASSERT_GT(near.size(), 10u);
+    const SearchRegion region = SearchRegion::around(near, 2);
+    const std::size_t part = estimate_extraction_bytes(grid, r.config(), Evaluation::Fast, SIZE_MAX, &region);
+    ASSERT_LT(part, whole / 2) << "the part reaches a fraction of the scan's blocks";
+    ReconstructionConfig c;
+    c.max_memory_mb = std::ceil(static_cast<double>(r.map_bytes() + (part + whole) / 2) / 1048576.0);
+    Reconstructor tight(c, Eigen::Vector3d::Zero());
+    tight.integrate(road);
+    expect_error([&] { tight.extract_mesh(); }, Expect::Resource, "the surface extraction would need about", "the whole map over the budget");
+    EXPECT_FALSE(tight.extract_mesh(region, [](const VoxelKey&) { return true; }).triangles.empty()) << "the part fits";
+}

@@ -95,7 +95,8 @@ public:
     /// (map/tiles.hpp). The same vertex values and marching cubes as extract_mesh(); the cubes are
     /// those the search reaches without leaving the region. Throws InvalidArgument without the
     /// seeded surface or with min_component_triangles (a filter over the whole map), InvalidInput
-    /// if no point was integrated, ResourceLimit as extract_mesh() (the estimate of the whole grid).
+    /// if no point was integrated, ResourceLimit as extract_mesh() with the estimate of the region
+    /// (estimate_extraction_bytes).
     Mesh extract_mesh(const SearchRegion& region, const std::function<bool(const VoxelKey&)>& owns);
 
     /// Brings the live mesh up to date with the scans integrated since the last call, nearest the
@@ -132,7 +133,7 @@ private:
     ReconstructionConfig surface_config(bool from_viewpoints) const;
     /// Sets summary().memory_estimate (the grid, the previous field, the carver and what the
     /// extraction will allocate) and throws ResourceLimit when it passes the budget.
-    void check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation);
+    void check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation, const SearchRegion* region = nullptr);
     /// The fast path's field over the grid (reusing the previous one) or over `region`; its
     /// counts and time in the summary.
     SeededTsdf seeded_field(const ReconstructionConfig& config, const SearchRegion* region);
@@ -151,8 +152,11 @@ private:
 /// Estimated peak bytes extract_mesh allocates on top of `grid` (search or candidate lists, TSDF
 /// field, welding tables), from the grid's blocks. Calibrated against peak RSS in
 /// docs/reliability.md; errs on the high side. Counting stops once the estimate passes `limit`.
+/// With `region` (the fast path's search kept to a part of the map, extract_mesh(region, owns)),
+/// only the grid's blocks within the region's bounding box, grown by the configuration's reach,
+/// are counted: what that search can pack and visit.
 std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
-                                      std::size_t limit = SIZE_MAX);
+                                      std::size_t limit = SIZE_MAX, const SearchRegion* region = nullptr);
 
 /// One-shot helper: integrate `cloud` and extract the mesh.
 Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const ReconstructionConfig& config,
