@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numeric>
 
 #include <tbb/task_arena.h>
 
@@ -276,23 +275,20 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
     // bounding box grown by the reach of a vertex's neighbourhoods (in blocks, rounded up, plus
     // one for the region's cubes on a block's last layer).
     const std::vector<VoxelKey>& keys = grid.index().block_keys();
-    std::vector<std::size_t> counted;
+    VoxelKey lo = VoxelKey::Constant(std::numeric_limits<int>::min()), hi = VoxelKey::Constant(std::numeric_limits<int>::max());
     if (region) {
-        VoxelKey lo = VoxelKey::Constant(std::numeric_limits<int>::max()), hi = VoxelKey::Constant(std::numeric_limits<int>::min());
+        lo = VoxelKey::Constant(std::numeric_limits<int>::max()), hi = VoxelKey::Constant(std::numeric_limits<int>::min());
         for (const VoxelKey& b : region->blocks()) lo = lo.cwiseMin(b), hi = hi.cwiseMax(b);
         const int grow = (config.max_reach() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize + 1;
         lo.array() -= grow, hi.array() += grow;
-        for (std::size_t b = 0; b < keys.size(); ++b)
-            if ((keys[b].array() >= lo.array()).all() && (keys[b].array() <= hi.array()).all()) counted.push_back(b);
-    } else {
-        counted.resize(keys.size());
-        std::iota(counted.begin(), counted.end(), std::size_t{0});
     }
-    const std::size_t blocks = counted.size();
-    // Blocks the surface runs through (3+ voxels), and the voxels.
-    std::size_t surface_blocks = 0, voxels = 0;
-    for (const std::size_t b : counted) {
+    const auto counted = [&](std::size_t b) { return (keys[b].array() >= lo.array()).all() && (keys[b].array() <= hi.array()).all(); };
+    // The blocks, those the surface runs through (3+ voxels), and the voxels.
+    std::size_t blocks = 0, surface_blocks = 0, voxels = 0;
+    for (std::size_t b = 0; b < keys.size(); ++b) {
+        if (!counted(b)) continue;
         const int n = popcount(grid.occupancy(b));
+        ++blocks;
         surface_blocks += n >= 3;
         voxels += static_cast<std::size_t>(n);
     }
@@ -316,13 +312,15 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const Reconstructio
     const int r = (config.max_level() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize;
     BlockIndex dilated;
     std::size_t count = 0;
-    for (const std::size_t b : counted)
+    for (std::size_t b = 0; b < keys.size(); ++b) {
+        if (!counted(b)) continue;
         for (int z = -r; z <= r; ++z)
             for (int y = -r; y <= r; ++y)
                 for (int x = -r; x <= r; ++x) {
                     if (!dilated.try_emplace(VoxelKey(keys[b].x() + x, keys[b].y() + y, keys[b].z() + z), 0).second) continue;
                     if (mesh + ++count * kPerBlock > limit) return mesh + count * kPerBlock;
                 }
+    }
     return mesh + count * kPerBlock;
 }
 
