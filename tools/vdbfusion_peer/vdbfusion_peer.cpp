@@ -39,6 +39,17 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 const std::function<float(float)> constant_weight = [](float) { return 1.0f; };
 
+// The finite points of scan `frame` moved by `pose` (read_world_scan keeps NaN as NaN; VDBFusion
+// would trace a ray to it).
+std::vector<Eigen::Vector3d> finite_points(const lidarsurf::KittiSequence& seq, std::size_t frame, const Eigen::Isometry3d& pose) {
+    const lidarsurf::PointCloud cloud = lidarsurf::read_world_scan(seq, frame, pose);
+    std::vector<Eigen::Vector3d> points;
+    points.reserve(cloud.points.size());
+    for (const Eigen::Vector3d& p : cloud.points)
+        if (p.allFinite()) points.push_back(p);
+    return points;
+}
+
 lidarsurf::Mesh extract(const vdbfusion::VDBVolume& volume, float min_weight) {
     const auto [vertices, triangles] = volume.ExtractTriangleMesh(true, min_weight);
     lidarsurf::Mesh mesh;
@@ -57,11 +68,7 @@ void mesh_single_scans(const lidarsurf::KittiSequence& seq, std::size_t n, const
     std::filesystem::create_directories(out);
     std::ostringstream times;
     for (std::size_t i = 0; i < n; ++i) {
-        lidarsurf::PointCloud cloud = lidarsurf::read_points(seq.scan(i));
-        std::vector<Eigen::Vector3d> points;
-        points.reserve(cloud.points.size());
-        for (const Eigen::Vector3d& p : cloud.points)
-            if (p.allFinite()) points.push_back(p);
+        const std::vector<Eigen::Vector3d> points = finite_points(seq, i, Eigen::Isometry3d::Identity());
         const auto t0 = std::chrono::steady_clock::now();
         vdbfusion::VDBVolume volume(voxel_size, sdf_trunc, space_carving);
         volume.Integrate(points, Eigen::Vector3d(Eigen::Vector3d::Zero()), constant_weight);
@@ -116,11 +123,7 @@ int main(int argc, char** argv) {
         double integrate_s = 0;
         nlohmann::json per_frame = nlohmann::json::array();
         for (std::size_t i = 0; i < n; ++i) {
-            lidarsurf::PointCloud cloud = lidarsurf::read_points(seq.scan(i));
-            std::vector<Eigen::Vector3d> world;
-            world.reserve(cloud.points.size());
-            for (const Eigen::Vector3d& p : cloud.points)
-                if (p.allFinite()) world.push_back(poses[i] * p);
+            const std::vector<Eigen::Vector3d> world = finite_points(seq, i, poses[i]);
             const auto t0 = std::chrono::steady_clock::now();
             const Eigen::Vector3d origin = poses[i].translation();
             volume.Integrate(world, origin, constant_weight);
