@@ -5,7 +5,8 @@
 # (Open3D's alpha shape and Poisson from Debian's python3-open3d; PCL's MLS + greedy projection
 # when PCL_PEER names tools/pcl_peer's binary, `make accuracy-pcl` builds it; VDBFusion on each scan
 # alone when VDBFUSION_PEER names tools/vdbfusion_peer's binary, `make map-peers` builds it: its KITTI
-# settings, 0.1 m voxels, 0.3 m truncation, min weight 5, and the same without the weight filter).
+# settings, 0.1 m voxels, 0.3 m truncation, min weight 5, and the same with min weight 1 and with
+# no weight filter).
 #   scripts/accuracy_sensors.sh CLI OUT
 # Environment: SEED (21), FRAMES (3), SENSORS, SCENES, METHODS (benchmark rows), O3D_METHODS.
 # Prints the markdown table and writes OUT/sensors.json.
@@ -35,6 +36,7 @@ for scene in $scenes; do
         fi
         if [ -n "${VDBFUSION_PEER:-}" ] && [ ! -f "$seq/peers/done-vdbfusion" ]; then
             "$VDBFUSION_PEER" "$seq" "$seq/peers/vdbfusion-kitti" --single-scans --frames "$frames" --voxel-size 0.1 --sdf-trunc 0.3 --min-weight 5 2>/dev/null
+            "$VDBFUSION_PEER" "$seq" "$seq/peers/vdbfusion-w1" --single-scans --frames "$frames" --voxel-size 0.1 --sdf-trunc 0.3 --min-weight 1 2>/dev/null
             "$VDBFUSION_PEER" "$seq" "$seq/peers/vdbfusion-w0" --single-scans --frames "$frames" --voxel-size 0.1 --sdf-trunc 0.3 --min-weight 0 2>/dev/null
             touch "$seq/peers/done-vdbfusion"
         fi
@@ -56,6 +58,7 @@ names = {"default": "**lidarsurf default**", "AN+GC kmax=5": "the paper's AN+GC,
          "poisson-d9": "Open3D Poisson, depth 9, 5 % trim", "poisson-d10": "Open3D Poisson, depth 10, 5 % trim",
          "pcl-mls-gp": "PCL MLS + greedy projection",
          "vdbfusion-kitti": "VDBFusion, each scan alone, its KITTI settings (0.1 m, min weight 5)",
+         "vdbfusion-w1": "VDBFusion, each scan alone, 0.1 m, min weight 1",
          "vdbfusion-w0": "VDBFusion, each scan alone, 0.1 m, no weight filter"}
 print("| method | " + " | ".join(f"{s} {n}" for s, n in cols) + " |")
 print("|---" * (len(cols) + 1) + "|")
