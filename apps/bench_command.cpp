@@ -38,21 +38,11 @@ namespace fs = std::filesystem;
 namespace lidarsurf::cli {
 namespace {
 
-// Peak resident memory of this process since the last reset_peak_rss(), in MiB (Linux VmHWM;
-// writing 5 to clear_refs resets it to the current resident memory). -1 when unavailable. The
-// memory an earlier row freed is given back first (the allocator keeps some for reuse,
-// apps/allocator_tuning.hpp), so that a row's peak is its own.
+// A row's peak resident memory is its own: the memory an earlier row freed is given back first
+// (the allocator keeps some for reuse, apps/allocator_tuning.hpp), then the peak is reset.
 void reset_peak_rss() {
     release_free_memory();
-    std::ofstream f("/proc/self/clear_refs");
-    if (f) f << "5";
-}
-double peak_rss_mib() {
-    std::ifstream f("/proc/self/status");
-    std::string line;
-    while (std::getline(f, line))
-        if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
-    return -1;
+    reset_peak_resident();
 }
 
 // The fields of the first CPU in /proc/cpuinfo ("model name" -> "AMD EPYC", ...).
@@ -203,7 +193,7 @@ Row run_row(const Input& in, Path path, const Method& method, int threads, int r
         row.mesh.push_back(mesh_ms);
         row.total.push_back(read_ms + insert + tsdf + mesh_ms);
     }
-    row.peak_rss = peak_rss_mib();
+    row.peak_rss = peak_resident_mib();
     return row;
 }
 
@@ -262,7 +252,7 @@ std::vector<Row> run_sector_rows(const Input& in, const Method& method, int thre
             row.mesh.push_back(mesh_ms);
             row.total.push_back(insert + tsdf + mesh_ms);
         }
-        row.peak_rss = peak_rss_mib();
+        row.peak_rss = peak_resident_mib();
     }
     if (last[0].vertices != last[1].vertices || last[0].triangles != last[1].triangles)
         throw Error("bench: the incremental re-mesh differs from the mesh of one extraction (a bug; please report it)");

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "lidarsurf/core/setting.hpp"
+#include "lidarsurf/core/stopwatch.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/core/format_value.hpp"
 
@@ -51,57 +53,40 @@ int exit_code(const Error& e) {
 
 namespace {
 
-// An option under the name of its Config field (kebab-case) with its earlier spelling kept as a
-// hidden alias (not in --help) for one release. Returns both options.
-template <typename T>
-std::vector<CLI::Option*> field_option(CLI::App* app, const std::string& name, const std::string& alias, T& value, const std::string& help) {
-    std::vector<CLI::Option*> out{app->add_option(name, value, help)->capture_default_str()};
-    if (!alias.empty()) out.push_back(app->add_option(alias, value, "alias of " + name)->group(""));
+// The options of the settings of Component's table (core/setting.hpp) that `pick` accepts,
+// filling `c`: each under the name of its field in kebab-case, with its earlier spelling as a
+// hidden alias (not in --help). Returns the options added, aliases included.
+template <typename Component, typename Pick>
+std::vector<CLI::Option*> setting_options(CLI::App* app, ReconstructionConfig& c, Pick&& pick) {
+    std::vector<CLI::Option*> out;
+    Component::for_each_setting([&](const Setting& s, auto member) {
+        if (!pick(s)) return;
+        auto& value = c.*member;
+        out.push_back(app->add_option(s.option(), value, s.help)->capture_default_str());
+        if (*s.alias) out.push_back(app->add_option(s.alias, value, "alias of " + s.option())->group(""));
+    });
     return out;
 }
+constexpr auto every = [](const Setting&) { return true; };
 
 }  // namespace
 
 std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig& c, bool with_constant_level) {
-    field_option(app, "--voxel-size", "--voxel", c.voxel_size, "Voxel size alpha in metres");
-    field_option(app, "--tau", "", c.tau, "Gaussian confidence threshold tau, Eq. (3)");
-    field_option(app, "--n-min", "--nmin", c.n_min, "Minimum points N_min in a neighbourhood, Eq. (1)");
-    field_option(app, "--k-max", "--kmax", c.k_max, "Largest neighbourhood level k_max (adaptive modes)");
-    if (with_constant_level) field_option(app, "--k", "", c.k, "Neighbourhood level k (constant modes cn, cn+gc)");
-    std::vector<CLI::Option*> guards;
-    auto guard = [&guards](std::vector<CLI::Option*> options) { guards.insert(guards.end(), options.begin(), options.end()); };
-    guard(field_option(app, "--min-planarity", "", c.min_planarity, "Reject neighbourhoods with lambda2 < this * lambda1 (0 = off)"));
-    guard(field_option(app, "--max-thickness", "", c.max_thickness, "Reject neighbourhoods thicker than this (sqrt lambda3, in voxels; 0 = off)"));
-    guard(field_option(app, "--slab-from-level", "--slab", c.slab_from_level,
-                       "Slab fallback from this level: a vertex whose cube has the points but no plane tries horizontal slabs (0 = off)"));
-    guard(field_option(app, "--slab-radial-extension", "--slab-radial", c.slab_radial_extension,
-                       "Slabs reach this many voxels further along the horizontal axis away from the sensor, across the scan rings (0 = square)"));
-    guard(field_option(app, "--bridge-reach", "", c.bridge_reach,
-                       "Single scans, AN+GC: a vertex no level defines is bridged between the scan rings within this many voxels "
-                       "beyond k_max on each side, at a confidence below tau (0 = off)"));
-    guard(field_option(app, "--bridge-range", "", c.bridge_range, "Bridges are tried within this horizontal distance of the sensor (metres)"));
-    guard(field_option(app, "--truncation-voxels", "--truncation", c.truncation_voxels, "TSDF truncation in voxels (0 = none)"));
-    guard(field_option(app, "--snap-to-plane", "--snap", c.snap_to_plane, "Move mesh vertices onto the plane of the nearer lattice vertex (0 = interpolate)"));
-    guard(field_option(app, "--seeded-surface", "--seeded", c.seeded_surface, "Keep only the surface connected to the data (0 = every defined cube)"));
-    guard(field_option(app, "--seed-dilation", "", c.seed_dilation, "Seed cubes within this many cubes of an occupied voxel"));
-    guard(field_option(app, "--min-component-triangles", "--min-component", c.min_component_triangles, "Drop mesh pieces with fewer triangles (0 = keep all)"));
-    guard(field_option(app, "--carve", "", c.carve,
-                       "Sequences: remove voxels that later rays went through (moving objects; 0 = keep every point)"));
-    guard(field_option(app, "--carve-margin-voxels", "", c.carve_margin_voxels,
-                       "Carving: a ray counts only if it returned this far behind the voxel's surface (voxels)"));
-    guard(field_option(app, "--carve-min-scans", "", c.carve_min_scans,
-                       "Carving: scans that must see through a voxel (and more than hit it) before it is removed"));
-    guard(field_option(app, "--carve-range", "", c.carve_range, "Carving: test the voxels within this distance of each scan's sensor (metres)"));
-    guard(field_option(app, "--carve-stale-scans", "", c.carve_stale_scans,
-                       "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its "
-                       "plane (0 = never)"));
+    // The paper's parameters, then the guards, the surface's and carving's (--literal excludes them).
+    setting_options<SurfaceConfig>(app, c, [&](const Setting& s) { return !s.guard() && (with_constant_level || std::string_view(s.name) != "k"); });
+    std::vector<CLI::Option*> guards = setting_options<SurfaceConfig>(app, c, [](const Setting& s) { return s.guard(); });
+    for (CLI::Option* o : setting_options<CarvingConfig>(app, c, every)) guards.push_back(o);
     return guards;
 }
 
-void add_run_options(CLI::App* app, ReconstructionConfig& c) {
-    field_option(app, "--max-memory-mb", "--max-memory", c.max_memory_mb,
-                 "Memory budget in MiB: refuse (exit 5, with the estimate) an input or a reconstruction needing more");
-    field_option(app, "--threads", "", c.threads, "Worker threads (0 = all cores)");
+void add_run_options(CLI::App* app, ReconstructionConfig& c) { setting_options<RunConfig>(app, c, every); }
+
+void add_live_mesh_options(CLI::App* app, ReconstructionConfig& c) { setting_options<LiveMeshConfig>(app, c, every); }
+
+nlohmann::json config_json(const ReconstructionConfig& c) {
+    nlohmann::json j = {{"mode", std::string(to_string(c.mode))}};
+    ReconstructionConfig::for_each_setting([&](const Setting& s, auto member) { j[s.name] = c.*member; });
+    return j;
 }
 
 void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
@@ -145,7 +130,7 @@ Method resolve_method(const ReconstructOptions& o) {
     m.read.bin_fields = o.bin_fields;
     m.read.max_bytes = static_cast<std::size_t>(m.config.max_memory_mb * 1048576.0);  // the input alone must fit the budget
     if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
-    m.imls_config = ImlsConfig::matching(m.config);
+    m.imls_config = ImlsConfig::matching(m.config, m.config.threads);
     if (o.imls_radius) {
         m.imls_config.radius = o.imls.radius;
         m.imls_config.bandwidth = o.imls.radius / 3.0;
@@ -175,15 +160,15 @@ std::FILE* report_stream(const fs::path& output) {
     return same ? stderr : stdout;
 }
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+double ms_since(std::chrono::steady_clock::time_point t0) { return 1e3 * seconds_since(t0); }
 
 void write_text(const std::string& path, const std::string& text) {
     AtomicFile file(path);
     file.stream() << text;
     file.commit();
 }
+
+void write_json(const std::string& path, const nlohmann::json& j) { write_text(path, j.dump(1) + "\n"); }
 
 
 std::string extension_of(const fs::path& path) {
@@ -210,9 +195,17 @@ double resident_mib() {
     return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
 }
 double peak_resident_mib() {
+    // Linux's VmHWM (kB), which reset_peak_resident() can reset; the process's whole peak elsewhere.
+    std::ifstream f("/proc/self/status");
+    for (std::string line; std::getline(f, line);)
+        if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
     rusage u{};
     getrusage(RUSAGE_SELF, &u);
     return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+void reset_peak_resident() {
+    std::ofstream f("/proc/self/clear_refs");  // 5: the peak becomes the resident memory now
+    if (f) f << "5";
 }
 
 }  // namespace lidarsurf::cli

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/errors.hpp"
@@ -25,8 +26,12 @@ int exit_code(const Error& e);
 /// as hidden aliases), filling `c` whose values are the defaults shown. Returns the guard options
 /// (the ones --literal excludes).
 std::vector<CLI::Option*> add_config_options(CLI::App* app, ReconstructionConfig& c, bool with_constant_level);
-/// --max-memory-mb and --threads (ReconstructionConfig's run settings).
+/// --max-memory-mb and --threads (ReconstructionConfig's run settings, RunConfig).
 void add_run_options(CLI::App* app, ReconstructionConfig& c);
+/// --live-growth, --live-range, --live-reach-blocks, --live-halo-cubes (LiveMeshConfig).
+void add_live_mesh_options(CLI::App* app, ReconstructionConfig& c);
+/// Every setting of `c` by its field's name, and its mode: a JSON report's "config".
+nlohmann::json config_json(const ReconstructionConfig& c);
 
 /// Options shared by `reconstruct`, `evaluate --holdout`, `bench` and `fuse`.
 struct ReconstructOptions {
@@ -56,14 +61,18 @@ Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary);
 std::FILE* report_stream(const std::filesystem::path& output);
 
 double ms_since(std::chrono::steady_clock::time_point t0);
-/// This process's resident memory now, and its peak so far (MiB).
+/// This process's resident memory now, and its peak since it started or since the last
+/// reset_peak_resident() (MiB; Linux).
 double resident_mib();
 double peak_resident_mib();
+void reset_peak_resident();
 /// Lower-case extension with the dot (".ply"), "" when none.
 std::string extension_of(const std::filesystem::path& path);
 /// The whole file; IoError when it cannot be read.
 std::string read_text_file(const std::filesystem::path& path);
 /// Writes `text` to `path` atomically.
 void write_text(const std::string& path, const std::string& text);
+/// Writes a JSON report to `path` atomically (indented by one, a final newline).
+void write_json(const std::string& path, const nlohmann::json& j);
 
 }  // namespace lidarsurf::cli

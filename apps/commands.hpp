@@ -1,6 +1,6 @@
 #pragma once
-// The subcommands beyond reconstruct/evaluate: each adds itself to the app and runs from its
-// options. Errors are thrown as lidarsurf exceptions; main() maps them to exit codes.
+// The subcommands, one *_command.cpp each: each adds itself to the app and runs from its options.
+// Errors are thrown as lidarsurf exceptions; main() maps them to exit codes.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,10 +10,37 @@
 #include "cli_common.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
-#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/tiles/tiles.hpp"
 #include "lidarsurf/eval/map_metrics.hpp"
+#include "lidarsurf/eval/metrics.hpp"
+#include "lidarsurf/eval/ring_holdout.hpp"
 
 namespace lidarsurf::cli {
+
+struct ReconstructCommandOptions {
+    std::string input, output, mesh_format = "auto";
+    ReconstructOptions reconstruct;
+};
+CLI::App* add_reconstruct_command(CLI::App& app, ReconstructCommandOptions& o);
+int run_reconstruct(const ReconstructCommandOptions& o);
+
+struct EvaluateOptions {
+    std::vector<std::string> inputs;
+    std::string json, mesh_out, gt_format = "auto";
+    int gt_bin_fields = 4;
+    double holdout = 0, gt_spacing = 0.02;
+    bool holdout_rings = false;
+    std::string ring_field = "auto";
+    std::uint64_t seed = 1;
+    EvaluationConfig eval;
+    RingHoldoutConfig rings;
+    bool max_range_given = false;
+    std::string ring_option;  // --ring-field or --range-bin when given: they need --holdout-rings
+    bool json_given = false, mesh_out_given = false;  // an option given with an empty name is an error
+    ReconstructOptions reconstruct;  // the method of --holdout and --holdout-rings; --origin, --threads
+};
+CLI::App* add_evaluate_command(CLI::App& app, EvaluateOptions& o);
+int run_evaluate(EvaluateOptions o);
 
 struct SimulateOptions {
     std::string scene = "town", sensor = "hdl64", output, gt, from, to;
@@ -102,16 +129,9 @@ struct FuseInput {
 FuseInput read_fuse_input(const FuseOptions& o);
 /// fuse --tile-size: the map in tiles, one after the other, the mesh written tile by tile.
 int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in);
-/// The side of the squares `fuse` meshes its map in when it writes it (write_by_squares).
-inline constexpr double kWriteSquare = 64.0;
-/// Meshes the map of `rec` square by square (the tiles of `plan`, map/tiles.hpp's mesh_tile) and
-/// writes each square's mesh to `output` as it comes, the seams welded: the triangles of
-/// rec.extract_mesh(), without the whole mesh in memory. `whole`, when given, also gets every
-/// square's mesh (seams not welded: for a viewer). Returns rec's summary with the squares' counts
-/// and times summed. Throws InvalidInput for an empty mesh (nothing written).
-ReconstructionSummary write_by_squares(Reconstructor& rec, const TilePlan& plan, const std::string& output, MeshFormat format,
-                                       Mesh* whole = nullptr);
-
+/// What both ways of `fuse` open their JSON report with: the drives, their poses, the method and
+/// its settings ("config"), the frame count.
+nlohmann::json fuse_report_head(const FuseInput& in, const Method& m);
 struct MapBenchmarkOptions {
     std::string dir, out, vdbfusion, fuse_options;
     std::string rows = "default,no-carving,paper";

@@ -11,8 +11,6 @@
 #include <memory>
 #include <thread>
 
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -22,11 +20,9 @@
 #include "interrupt.hpp"
 #include "progress.hpp"
 #include "viewer_page.hpp"
-#include "lidarsurf/io/atomic_file.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
-#include "lidarsurf/io/mesh_stream.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
-#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/tiles/tile_writer.hpp"
 #include "lidarsurf/eval/live_staleness.hpp"
 #include "lidarsurf/eval/metrics.hpp"
 #include "lidarsurf/viz/live_server.hpp"
@@ -65,18 +61,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
                   "With --live: every this many scans, extract the exact mesh and measure the live mesh against it within "
                   "30 m of the sensor (the share of its area farther than 5 cm; slow: the exact extraction)")
         ->capture_default_str();
-    f->add_option("--live-growth", o.reconstruct.config.live_growth,
-                  "Live mesh: re-mesh a block when the points near it changed (inserted or carved) by this fraction since it was meshed")
-        ->capture_default_str();
-    f->add_option("--live-range", o.reconstruct.config.live_range,
-                  "Live mesh: blocks farther than this from the sensor (metres) wait until it comes back near them")
-        ->capture_default_str();
-    f->add_option("--live-reach-blocks", o.reconstruct.config.live_reach_blocks,
-                  "Live mesh: a block depends on the changes within this many blocks (8 voxels) of it")
-        ->capture_default_str();
-    f->add_option("--live-halo-cubes", o.reconstruct.config.live_halo_cubes,
-                  "Live mesh: the surface search of a block reaches this many cubes beyond it")
-        ->capture_default_str();
+    add_live_mesh_options(f, o.reconstruct.config);
     f->add_option("--serve", o.serve,
                   "Watch the map grow in a browser: serve the live view at http://127.0.0.1:PORT/ (implies --live; 0: a free "
                   "port, printed). After the drive the final map stays served until Ctrl-C")
@@ -109,12 +94,6 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
               "  lidarsurf fuse town -o town.ply --serve 8080 --rate 10          (then open http://127.0.0.1:8080/)");
     return f;
 }
-
-namespace {
-// The live mesh's staleness (docs/method.md, "Live mesh"): within 30 m of the sensor, 5 cm.
-constexpr double kStalenessRadius = 30.0, kStalenessTolerance = 0.05;
-
-}  // namespace
 
 std::string FuseInput::label(std::size_t n) const {
     const std::string frame = KittiSequence::frame_name(scans[n].frame);
@@ -157,99 +136,82 @@ FuseInput read_fuse_input(const FuseOptions& o) {
     return in;
 }
 
-int run_fuse(const FuseOptions& o) {
+nlohmann::json fuse_report_head(const FuseInput& in, const Method& m) {
+    return {{"sequence", in.name()}, {"poses", in.layout()}, {"method", method_name(m)}, {"carve", m.config.carve},
+            {"config", config_json(m.config)}, {"frames", in.scans.size()}};
+}
+
+namespace {
+
+// The live mesh's staleness (docs/method.md, "Live mesh"): within 30 m of the sensor, 5 cm.
+constexpr double kStalenessRadius = 30.0, kStalenessTolerance = 0.05;
+
+// Step 1: fuse's options, checked before any file is read.
+struct FuseChecked {
+    Method method;
+    bool serve = false, live = false;
+    MeshFormat requested = MeshFormat::Auto;
+};
+FuseChecked check_fuse_options(const FuseOptions& o) {
     if (o.remesh_every < 0) throw InvalidArgument("--remesh-every must be >= 0");
     if (!std::isfinite(o.live_budget_ms) || o.live_budget_ms < 0 || o.live_check_every < 0)
         throw InvalidArgument("--live-budget-ms and --live-check-every must be >= 0");
     if (!o.live && o.live_check_every > 0) throw InvalidArgument("--live-check-every measures the live mesh: add --live");
     if (o.serve < -1 || o.serve > 65535) throw InvalidArgument("--serve takes a port in [0, 65535] (0: a free one)");
     if (!std::isfinite(o.rate) || o.rate < 0) throw InvalidArgument("--rate must be >= 0 scans a second");
-    const bool serve = o.serve >= 0, live = o.live || serve;
-    if (!serve && o.bind != "127.0.0.1") throw InvalidArgument("--bind is the live view's address: add --serve PORT");
-    if (serve) require_viewer();
-    const Method m = resolve_method(o.reconstruct);
+    FuseChecked c;
+    c.serve = o.serve >= 0;
+    c.live = o.live || c.serve;
+    if (!c.serve && o.bind != "127.0.0.1") throw InvalidArgument("--bind is the live view's address: add --serve PORT");
+    if (c.serve) require_viewer();
+    c.method = resolve_method(o.reconstruct);
+    const Method& m = c.method;
     if (m.imls) throw InvalidArgument("fuse: the method must be default or paper (IMLS meshes one scan)");
-    if (live) LiveMesh::check(m.config);  // before any scan is read
+    if (c.live) LiveMesh::check(m.config.surface(), m.config.live());  // before any scan is read
     if (o.tiles.tile_size != 0) {
-        if (live || o.remesh_every > 0) throw InvalidArgument("--tile-size meshes each tile once, at its end: not with --live, --serve or --remesh-every");
+        if (c.live || o.remesh_every > 0) throw InvalidArgument("--tile-size meshes each tile once, at its end: not with --live, --serve or --remesh-every");
         o.tiles.validate();
         TilePlan::check(m.config);
     }
-    const MeshFormat requested = parse_mesh_format(o.mesh_format);
-    FuseInput in = read_fuse_input(o);
-    const MeshFormat format = mesh_format_for(o.output, requested);  // .stl: exit 2 now
-    in.format = format;
-    if (o.tiles.tile_size != 0) return run_fuse_tiles(o, m, in);
-    std::FILE* const report = report_stream(o.output);
+    c.requested = parse_mesh_format(o.mesh_format);
+    return c;
+}
 
-    Reconstructor rec(m.config, in.pose(0) * m.sensor);
-    // The output is meshed square by square and written as it goes (write_by_squares), so that the
-    // whole mesh is never held: every seeded-surface method without the whole map's component filter.
-    const bool by_squares = m.config.seeded_surface && m.config.min_component_triangles == 0;
-    std::vector<ScanReach> reaches;
-    Mesh mesh;
-    double read_ms = 0;
-    bool fresh = false;  // whether `mesh` holds every frame fused so far
-    nlohmann::json per_frame = nlohmann::json::array();
-    std::vector<double> update_times, stale_shares;
-    // The live view: listening before the first scan (a port in use: exit 4 before any work).
-    std::unique_ptr<LiveServer> server;
-    std::string address;
-    if (serve) {
-        LiveServerConfig sc;
-        sc.bind = o.bind;
-        sc.port = o.serve;
-        nlohmann::json data = {{"title", fs::path(in.drives.front().seq.dir).filename().string() + " (live)"}, {"colour", "height"}, {"live", true}};
-        server = std::make_unique<LiveServer>(sc, viewer_page(data));
-        const bool v6 = o.bind.find(':') != std::string::npos;
-        address = "http://" + (v6 ? "[" + o.bind + "]" : o.bind) + ":" + std::to_string(server->port()) + "/";
-        std::fprintf(stderr, "fuse: the live view is at %s\n", address.c_str());
+// The map fused whole: the live view's server (listening before the first scan), then one step
+// per scan (read, integrate, the live mesh and its stream, the exact mesh when asked), then the
+// mesh written and the report.
+class WholeMapFusion {
+public:
+    WholeMapFusion(const FuseOptions& o, const FuseChecked& c, const FuseInput& in)
+        : o_(o), m_(c.method), in_(in), live_(c.live), rec_(m_.config, in.pose(0) * m_.sensor), report_(report_stream(o.output)) {
+        if (c.serve) start_server();
     }
-    const std::size_t count = in.scans.size();
-    Progress progress("fuse", "frames", count, o.quiet);
-    const auto start = std::chrono::steady_clock::now();
-    for (std::size_t n = 0; n < count; ++n) {
-        if (o.rate > 0) std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                                  std::chrono::duration<double>(static_cast<double>(n) / o.rate)));
+
+    // Step 2: scan n.
+    void scan(std::size_t n) {
+        const std::size_t count = in_.scans.size();
         auto t0 = std::chrono::steady_clock::now();
-        const PointCloud cloud = in.read(n, m.read);  // NaN stays NaN: integrate drops it
-        const Eigen::Isometry3d& pose = in.pose(n);
-        read_ms += ms_since(t0);
-        if (by_squares) reaches.push_back(scan_reach(cloud.points, pose * m.sensor));
-        const double before = rec.summary().seconds_insert + rec.summary().seconds_carve;
+        const PointCloud cloud = in_.read(n, m_.read);  // NaN stays NaN: integrate drops it
+        const Eigen::Isometry3d& pose = in_.pose(n);
+        read_ms_ += ms_since(t0);
+        if (by_tiles()) reaches_.push_back(scan_reach(cloud.points, pose * m_.sensor));
+        const double before = rec_.summary().seconds_insert + rec_.summary().seconds_carve;
         const auto t_update = std::chrono::steady_clock::now();
-        rec.integrate(cloud.points, pose * m.sensor);
-        nlohmann::json row = {{"frame", in.scans[n].frame},
-                              {"drive", in.scans[n].drive},
-                              {"integrate_ms", 1e3 * (rec.summary().seconds_insert + rec.summary().seconds_carve - before)},
-                              {"voxels", rec.summary().voxels}};
+        rec_.integrate(cloud.points, pose * m_.sensor);
+        nlohmann::json row = {{"frame", in_.scans[n].frame},
+                              {"drive", in_.scans[n].drive},
+                              {"integrate_ms", 1e3 * (rec_.summary().seconds_insert + rec_.summary().seconds_carve - before)},
+                              {"voxels", rec_.summary().voxels}};
         // The exact mesh along the way: for --remesh-every, and for the live mesh's check (one
         // extraction when both fall on this scan).
         auto falls_here = [&](int every) { return every > 0 && ((n + 1) % static_cast<std::size_t>(every) == 0 || n + 1 == count); };
-        const bool remesh = falls_here(o.remesh_every), check = live && falls_here(o.live_check_every);
-        if (live) {
-            MeshDelta delta = rec.update_mesh(o.live_budget_ms);
-            const double update_ms = ms_since(t_update);
-            update_times.push_back(update_ms);
-            row["update_ms"] = update_ms;
-            row["live_ms"] = 1e3 * delta.seconds;
-            row["delta_blocks"] = delta.changed.size() + delta.removed.size();
-            row["delta_triangles"] = delta.triangles();
-            row["meshed_blocks"] = delta.meshed_blocks;
-            row["pending_blocks"] = delta.pending;
-            row["live_triangles"] = rec.live()->triangle_count();
-            if (server) {
-                const auto t_serve = std::chrono::steady_clock::now();
-                server->publish(std::move(delta), pose, static_cast<std::uint32_t>(n + 1));
-                row["serve_ms"] = ms_since(t_serve);
-            }
-        }
-        progress.update(n + 1, std::to_string(rec.summary().voxels) + " voxels");
-        fresh = remesh || check;
-        if (fresh) mesh = rec.extract_mesh();
+        const bool remesh = falls_here(o_.remesh_every), check = live_ && falls_here(o_.live_check_every);
+        if (live_) update_live(n, pose, t_update, row);
+        fresh_ = remesh || check;
+        if (fresh_) mesh_ = rec_.extract_mesh();
         if (check) {
-            const Staleness st = measure_staleness(rec.live_mesh(), mesh, pose * m.sensor, kStalenessRadius, kStalenessTolerance);
-            stale_shares.push_back(st.share());
+            const Staleness st = measure_staleness(rec_.live_mesh(), mesh_, pose * m_.sensor, kStalenessRadius, kStalenessTolerance);
+            stale_shares_.push_back(st.share());
             row["staleness"] = {{"share", st.share()},
                                 {"live_area_m2", st.live_area},
                                 {"stale_area_m2", st.stale_area},
@@ -257,93 +219,174 @@ int run_fuse(const FuseOptions& o) {
                                 {"covered_share", st.covered_share()}};
         }
         if (remesh) {
-            const ReconstructionSummary& s = rec.summary();
+            const ReconstructionSummary& s = rec_.summary();
             row["remesh_ms"] = 1e3 * (s.seconds_tsdf + s.seconds_mesh);
-            std::fprintf(report, "frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
-                        in.label(n).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles,
-                        1e3 * s.seconds_tsdf, 1e3 * s.seconds_mesh);
-            std::fflush(report);
+            std::fprintf(report_, "frame %s: %zu voxels, vertices evaluated %zu (reused %zu), mesh %zu triangles; tsdf %.1f ms, mesh %.1f ms\n",
+                         in_.label(n).c_str(), s.voxels, s.candidate_vertices, s.reused_vertices, s.mesh_triangles, 1e3 * s.seconds_tsdf,
+                         1e3 * s.seconds_mesh);
+            std::fflush(report_);
         }
         row["resident_mib"] = resident_mib();
-        row["map_mib"] = static_cast<double>(rec.map_bytes()) / 1048576.0;
-        per_frame.push_back(std::move(row));
+        row["map_mib"] = static_cast<double>(rec_.map_bytes()) / 1048576.0;
+        per_frame_.push_back(std::move(row));
     }
-    progress.finish(std::to_string(rec.summary().voxels) + " voxels");
-    // The scans' scratch and the old copies of the map's grown arrays, freed but kept by the
-    // allocator's tuning for the next scan, go back before the final mesh, whose peak is the run's.
-    release_free_memory();
-    const auto t0 = std::chrono::steady_clock::now();
-    ReconstructionSummary s;
-    if (by_squares) {
-        Mesh* const whole = server ? &mesh : nullptr;  // the live view's final map
-        if (whole) *whole = Mesh{};
-        s = write_by_squares(rec, TilePlan(std::move(reaches), m.config, TileConfig{kWriteSquare}), o.output, format, whole);
-    } else {
-        if (!fresh) mesh = rec.extract_mesh();
-        if (mesh.triangles.empty()) throw InvalidInput("the fused sequence gives an empty mesh");
-        write_mesh(mesh, o.output, format);
-        s = rec.summary();
-    }
-    const double write_ms = ms_since(t0) - 1e3 * (by_squares ? s.seconds_tsdf + s.seconds_mesh : 0.0);
-    std::fprintf(report, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", in.name().c_str(), count,
-                method_name(m).c_str(), in.layout().c_str(), s.to_string().c_str(), read_ms, write_ms, o.output.c_str());
-    if (!o.json.empty()) {
-        nlohmann::json j = {{"sequence", in.name()},
-                                  {"poses", in.layout()},
-                                  {"method", method_name(m)},
-                                  {"carve", m.config.carve},
-                                  {"frames", count},
-                                  {"points", s.points_read},
-                                  {"voxels", s.voxels},
-                                  {"carved_voxels", s.carved_voxels},
-                                  {"mesh_vertices", s.mesh_vertices},
-                                  {"mesh_triangles", s.mesh_triangles},
-                                  {"seconds",
-                                   {{"read", read_ms / 1e3},
-                                    {"insert", s.seconds_insert},
-                                    {"carve", s.seconds_carve},
-                                    {"last_tsdf", s.seconds_tsdf},
-                                    {"last_mesh", s.seconds_mesh},
-                                    {"write", write_ms / 1e3}}},
-                                  {"peak_resident_mib", peak_resident_mib()},
-                                  {"map_mib", static_cast<double>(rec.map_bytes()) / 1048576.0},
-                                  {"per_frame", per_frame}};
-        if (live) {
-            const DirectedError update = summarize(update_times);
-            nlohmann::json live_report = {{"budget_ms", o.live_budget_ms},
-                                          {"growth", m.config.live_growth},
-                                          {"range_m", m.config.live_range},
-                                          {"reach_blocks", m.config.live_reach_blocks},
-                                          {"halo_cubes", m.config.live_halo_cubes},
-                                          {"update_ms_median", update.median},
-                                          {"update_ms_p90", update.p90},
-                                          {"update_ms_max", update.max}};
-            if (!stale_shares.empty()) {
-                live_report["staleness_radius_m"] = kStalenessRadius;
-                live_report["staleness_tolerance_m"] = kStalenessTolerance;
-                const DirectedError stale = summarize(stale_shares);
-                live_report["staleness_median"] = stale.median;
-                live_report["staleness_max"] = stale.max;
-            }
-            j["live"] = live_report;
+
+    // Step 3: the mesh, written whole or not at all.
+    void write(MeshFormat format) {
+        // The scans' scratch and the old copies of the map's grown arrays, freed but kept by the
+        // allocator's tuning for the next scan, go back before the final mesh, whose peak is the run's.
+        release_free_memory();
+        const auto t0 = std::chrono::steady_clock::now();
+        if (by_tiles()) {
+            Mesh* const whole = server_ ? &mesh_ : nullptr;  // the live view's final map
+            if (whole) *whole = Mesh{};
+            summary_ = write_in_tiles(rec_, TilePlan(std::move(reaches_), m_.config, TileConfig{kWriteTileSize}), o_.output, format, whole);
+        } else {
+            if (!fresh_) mesh_ = rec_.extract_mesh();
+            require_fused_triangles(mesh_.triangles.size());
+            write_mesh(mesh_, o_.output, format);
+            summary_ = rec_.summary();
         }
-        if (server) {
-            const LiveServer::Stats st = server->stats();  // at the end of the drive, before the final map is sent
-            j["serve"] = {{"port", server->port()},       {"clients_now", st.clients}, {"clients_accepted", st.accepted},
+        write_ms_ = ms_since(t0) - 1e3 * (by_tiles() ? summary_.seconds_tsdf + summary_.seconds_mesh : 0.0);
+    }
+
+    // Step 4: the report line, and the JSON report (--json).
+    void report() const {
+        const ReconstructionSummary& s = summary_;
+        std::fprintf(report_, "%s: %zu frames fused (%s, poses from %s); %s; read %.1f ms, write %.1f ms -> %s\n", in_.name().c_str(),
+                     in_.scans.size(), method_name(m_).c_str(), in_.layout().c_str(), s.to_string().c_str(), read_ms_, write_ms_,
+                     o_.output.c_str());
+        if (o_.json.empty()) return;
+        nlohmann::json j = fuse_report_head(in_, m_);
+        j["points"] = s.points_read;
+        j["voxels"] = s.voxels;
+        j["carved_voxels"] = s.carved_voxels;
+        j["mesh_vertices"] = s.mesh_vertices;
+        j["mesh_triangles"] = s.mesh_triangles;
+        j["seconds"] = {{"read", read_ms_ / 1e3},        {"insert", s.seconds_insert}, {"carve", s.seconds_carve},
+                        {"last_tsdf", s.seconds_tsdf}, {"last_mesh", s.seconds_mesh},  {"write", write_ms_ / 1e3}};
+        j["peak_resident_mib"] = peak_resident_mib();
+        j["map_mib"] = static_cast<double>(rec_.map_bytes()) / 1048576.0;
+        j["per_frame"] = per_frame_;
+        if (live_) j["live"] = live_report();
+        if (server_) {
+            const LiveServer::Stats st = server_->stats();  // at the end of the drive, before the final map is sent
+            j["serve"] = {{"port", server_->port()},       {"clients_now", st.clients}, {"clients_accepted", st.accepted},
                           {"clients_dropped", st.dropped}, {"messages", st.messages},  {"bytes", st.bytes}};
         }
-        AtomicFile out(o.json);
-        out.stream() << j.dump(1) << "\n";
-        out.commit();
+        write_json(o_.json, j);
     }
-    if (server) {
-        // The page keeps the final map: the exact mesh, block for block in place of the live one.
-        server->finish(split_into_blocks(mesh, rec.grid().origin(), m.config.voxel_size), in.pose(count - 1),
-                       static_cast<std::uint32_t>(count));
-        std::fprintf(stderr, "fuse: %s written; the final map is at %s until Ctrl-C\n", o.output.c_str(), address.c_str());
+
+    // With --serve: the page keeps the final map (the exact mesh, block for block in place of the
+    // live one) until Ctrl-C.
+    void serve_until_interrupted() {
+        if (!server_) return;
+        const std::size_t count = in_.scans.size();
+        server_->finish(split_into_blocks(mesh_, rec_.grid().origin(), m_.config.voxel_size), in_.pose(count - 1),
+                        static_cast<std::uint32_t>(count));
+        std::fprintf(stderr, "fuse: %s written; the final map is at %s until Ctrl-C\n", o_.output.c_str(), address_.c_str());
         finish_on_interrupt();
         wait_for_exit();
     }
+
+    std::size_t voxels() const { return rec_.summary().voxels; }
+
+private:
+    // The output is meshed tile by tile and written as it goes (write_in_tiles), so that the whole
+    // mesh is never held: every seeded-surface method without the whole map's component filter.
+    bool by_tiles() const { return m_.config.seeded_surface && m_.config.min_component_triangles == 0; }
+
+    // The live view: listening before the first scan (a port in use: exit 4 before any work).
+    void start_server() {
+        LiveServerConfig sc;
+        sc.bind = o_.bind;
+        sc.port = o_.serve;
+        nlohmann::json data = {{"title", fs::path(in_.drives.front().seq.dir).filename().string() + " (live)"}, {"colour", "height"}, {"live", true}};
+        server_ = std::make_unique<LiveServer>(sc, viewer_page(data));
+        const bool v6 = o_.bind.find(':') != std::string::npos;
+        address_ = "http://" + (v6 ? "[" + o_.bind + "]" : o_.bind) + ":" + std::to_string(server_->port()) + "/";
+        std::fprintf(stderr, "fuse: the live view is at %s\n", address_.c_str());
+    }
+
+    // The live mesh after scan n (timed from `t_update`, the integration included), sent to the
+    // live view's clients.
+    void update_live(std::size_t n, const Eigen::Isometry3d& pose, std::chrono::steady_clock::time_point t_update, nlohmann::json& row) {
+        MeshDelta delta = rec_.update_mesh(o_.live_budget_ms);
+        const double update_ms = ms_since(t_update);
+        update_times_.push_back(update_ms);
+        row["update_ms"] = update_ms;
+        row["live_ms"] = 1e3 * delta.seconds;
+        row["delta_blocks"] = delta.changed.size() + delta.removed.size();
+        row["delta_triangles"] = delta.triangles();
+        row["meshed_blocks"] = delta.meshed_blocks;
+        row["pending_blocks"] = delta.pending;
+        row["live_triangles"] = rec_.live()->triangle_count();
+        if (server_) {
+            const auto t_serve = std::chrono::steady_clock::now();
+            server_->publish(std::move(delta), pose, static_cast<std::uint32_t>(n + 1));
+            row["serve_ms"] = ms_since(t_serve);
+        }
+    }
+
+    nlohmann::json live_report() const {
+        const DirectedError update = summarize(update_times_);
+        nlohmann::json r = {{"budget_ms", o_.live_budget_ms},
+                            {"growth", m_.config.live_growth},
+                            {"range_m", m_.config.live_range},
+                            {"reach_blocks", m_.config.live_reach_blocks},
+                            {"halo_cubes", m_.config.live_halo_cubes},
+                            {"update_ms_median", update.median},
+                            {"update_ms_p90", update.p90},
+                            {"update_ms_max", update.max}};
+        if (!stale_shares_.empty()) {
+            r["staleness_radius_m"] = kStalenessRadius;
+            r["staleness_tolerance_m"] = kStalenessTolerance;
+            const DirectedError stale = summarize(stale_shares_);
+            r["staleness_median"] = stale.median;
+            r["staleness_max"] = stale.max;
+        }
+        return r;
+    }
+
+    const FuseOptions& o_;
+    const Method& m_;
+    const FuseInput& in_;
+    const bool live_;
+    Reconstructor rec_;
+    std::FILE* const report_;
+    std::unique_ptr<LiveServer> server_;
+    std::string address_;
+    std::vector<ScanReach> reaches_;  // with by_tiles(): the plan of the final write
+    Mesh mesh_;
+    bool fresh_ = false;  // whether mesh_ holds every frame fused so far
+    double read_ms_ = 0, write_ms_ = 0;
+    nlohmann::json per_frame_ = nlohmann::json::array();
+    std::vector<double> update_times_, stale_shares_;
+    ReconstructionSummary summary_;
+};
+
+}  // namespace
+
+int run_fuse(const FuseOptions& o) {
+    const FuseChecked checked = check_fuse_options(o);
+    FuseInput in = read_fuse_input(o);
+    in.format = mesh_format_for(o.output, checked.requested);  // .stl: exit 2 now
+    if (o.tiles.tile_size != 0) return run_fuse_tiles(o, checked.method, in);
+
+    WholeMapFusion fusion(o, checked, in);
+    const std::size_t count = in.scans.size();
+    Progress progress("fuse", "frames", count, o.quiet);
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t n = 0; n < count; ++n) {
+        if (o.rate > 0) std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                                  std::chrono::duration<double>(static_cast<double>(n) / o.rate)));
+        fusion.scan(n);
+        progress.update(n + 1, std::to_string(fusion.voxels()) + " voxels");
+    }
+    progress.finish(std::to_string(fusion.voxels()) + " voxels");
+    fusion.write(in.format);
+    fusion.report();
+    fusion.serve_until_interrupted();
     return 0;
 }
 

@@ -4,7 +4,7 @@
 #include "commands.hpp"
 #include "file_roles.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
-#include "lidarsurf/io/png_writer.hpp"
+#include "lidarsurf/viz/png_writer.hpp"
 #include "lidarsurf/viz/render.hpp"
 
 namespace lidarsurf::cli {

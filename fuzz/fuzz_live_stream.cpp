@@ -1,10 +1,10 @@
-// libFuzzer harness for the live stream's reader (io/live_stream.hpp): what a client of
+// libFuzzer harness for the live stream's reader (viz/live_stream.hpp): what a client of
 // `fuse --serve` decodes. A message read back encodes to the same bytes, and every triangle index
 // lies within its block.
 #include <vector>
 
 #include "fuzz_common.hpp"
-#include "lidarsurf/io/live_stream.hpp"
+#include "lidarsurf/viz/live_stream.hpp"
 
 using namespace lidarsurf;
 

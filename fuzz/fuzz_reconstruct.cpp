@@ -114,7 +114,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // IMLS (the baseline) is slow under the sanitizers: only small clouds.
     if ((flags & 2) && points.size() <= 400) {
         fuzz::expect_typed([&] {
-            ImlsConfig ic = ImlsConfig::matching(c);
+            ImlsConfig ic = ImlsConfig::matching(c, c.threads);
             ic.threads = c.threads;
             const Mesh mesh = reconstruct_imls(cloud, offset + sensor, ic);
             check_mesh(mesh, points, ic.radius + 2 * ic.voxel_size);

@@ -86,7 +86,7 @@ corner = [q for i in range(18) for j in range(18) for q in ((0.08 * i, 0.08 * j,
 put("fuzz_reconstruct", "plane", recon(0, plane))
 put("fuzz_reconstruct", "corner_imls", recon(2, corner))
 put("fuzz_reconstruct", "corner_far", recon(4, corner))
-# The live view's stream (io/live_stream.hpp): a header, a trajectory point, a removed block and a
+# The live view's stream (viz/live_stream.hpp): a header, a trajectory point, a removed block and a
 # block of one triangle; and a header alone.
 def live(flags, blocks):
     header = b"LSLV" + struct.pack("<III", 1, flags, 3) + struct.pack("<3d", 1000.0, 2000.0, 10.0)

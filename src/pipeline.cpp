@@ -16,12 +16,12 @@
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 #include "lidarsurf/core/format_value.hpp"
+#include "lidarsurf/core/stopwatch.hpp"
 
 namespace lidarsurf {
 namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+// The work of a call runs in an arena of config.threads workers (0: every core).
+tbb::task_arena arena_of(const RunConfig& run) { return tbb::task_arena(run.threads > 0 ? run.threads : tbb::task_arena::automatic); }
 const ReconstructionConfig& validated(const ReconstructionConfig& c) {
     c.validate();
     return c;
@@ -85,15 +85,15 @@ void Reconstructor::skip_scan() {
 
 void Reconstructor::ensure_carver() {
     if (carver_) return;
-    carver_.emplace(config_.carve_margin_voxels * config_.voxel_size, config_.carve_min_scans, config_.carve_range, config_.carve_stale_scans);
+    carver_.emplace(config_.carving(), config_.voxel_size);
     carver_->skip(skipped_scans_);
     skipped_scans_ = 0;
 }
 
 MeshDelta Reconstructor::update_mesh(double budget_ms) {
     if (!std::isfinite(budget_ms)) throw InvalidArgument("update_mesh: the budget must be finite (<= 0: no limit)");
-    if (!live_) live_.emplace(surface_config(true));
-    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    if (!live_) live_.emplace(surface_config(true), config_.live());
+    tbb::task_arena arena = arena_of(config_);
     return arena.execute([&] { return live_->update(grid_, sensor_, last_viewpoint_, budget_ms / 1e3); });
 }
 
@@ -104,7 +104,7 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     // a frame cut in two chunks paid two groupings and two parallel updates (0.6-0.8 ms).
     constexpr std::size_t kChunk = 1 << 18;
     const std::size_t before = grid_.memory_bytes();
-    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena = arena_of(config_);
     // Free-space carving: on scans seen from a known position (sequences), after the scan's points.
     const bool carving = config_.carve && grid_.has_viewpoints() && seen_from;
     if (carving) ensure_carver();
@@ -152,9 +152,9 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
     if (grid_.point_count() == 0)
         throw InvalidInput(summary_.points_read == 0 ? "the input has no points"
                                                      : "the input has no finite point (all " + format_value(summary_.points_read) + " dropped)");
-    const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
+    const SurfaceConfig config = surface_config(grid_.has_viewpoints());
     check_extraction_budget(config, evaluation);
-    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena = arena_of(config_);
     Mesh mesh;
     const VertexPlacement placement = vertex_placement();
     arena.execute([&] {
@@ -207,9 +207,9 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
     if (config_.min_component_triangles > 0)
         throw InvalidArgument("min_component_triangles filters the whole map's components: not for a part of it");
     if (grid_.point_count() == 0) throw InvalidInput("the input has no points");
-    const ReconstructionConfig config = surface_config(grid_.has_viewpoints());
+    const SurfaceConfig config = surface_config(grid_.has_viewpoints());
     check_extraction_budget(config, Evaluation::Fast, &region);
-    tbb::task_arena arena(config_.threads > 0 ? config_.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena = arena_of(config_);
     Mesh mesh;
     arena.execute([&] {
         SeededTsdf seeded = seeded_field(config, &region);
@@ -223,7 +223,7 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
     return mesh;
 }
 
-void Reconstructor::check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation, const SearchRegion* region) {
+void Reconstructor::check_extraction_budget(const SurfaceConfig& config, Evaluation evaluation, const SearchRegion* region) {
     const auto budget = static_cast<std::size_t>(budget_bytes());
     summary_.memory_estimate = map_bytes() + estimate_extraction_bytes(grid_, config, evaluation, budget, region);
     if (summary_.memory_estimate > budget)
@@ -232,7 +232,7 @@ void Reconstructor::check_extraction_budget(const ReconstructionConfig& config, 
                                             " blocks, max level " + format_value(config_.max_level())));
 }
 
-SeededTsdf Reconstructor::seeded_field(const ReconstructionConfig& config, const SearchRegion* region) {
+SeededTsdf Reconstructor::seeded_field(const SurfaceConfig& config, const SearchRegion* region) {
     const auto t0 = std::chrono::steady_clock::now();
     // A region search does not reuse the previous field (compute_seeded_tsdf).
     const TsdfField* previous = region || !previous_ ? nullptr : &*previous_;
@@ -249,8 +249,8 @@ VertexPlacement Reconstructor::vertex_placement() const {
     return config_.snap_to_plane ? VertexPlacement::SnappedToPlane : VertexPlacement::Interpolated;
 }
 
-ReconstructionConfig Reconstructor::surface_config(bool from_viewpoints) const {
-    ReconstructionConfig c = config_;
+SurfaceConfig Reconstructor::surface_config(bool from_viewpoints) const {
+    SurfaceConfig c = config_;
     if (from_viewpoints) c.bridge_reach = 0;  // bridges are for the rings of one scan
     return c;
 }
@@ -269,7 +269,7 @@ std::string Reconstructor::over_budget(const std::string& what, double bytes, co
     return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (max_memory_mb, CLI --max-memory-mb)";
 }
 
-std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
+std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const SurfaceConfig& config, Evaluation evaluation,
                                       std::size_t limit, const SearchRegion* region) {
     // The grid's blocks the extraction can reach: all of them, or those within the region's
     // bounding box grown by the reach of a vertex's neighbourhoods (in blocks, rounded up, plus

@@ -22,7 +22,7 @@ const VoxelGrid& grid() {
 // A sample of the vertices the fast path evaluates: the defined ones of its field.
 const std::vector<VoxelKey>& vertices() {
     static const std::vector<VoxelKey> v = [] {
-        const SeededTsdf s = compute_seeded_tsdf(grid(), ReconstructionConfig{}, Eigen::Vector3d::Zero());
+        const SeededTsdf s = compute_seeded_tsdf(grid(), SurfaceConfig{}, Eigen::Vector3d::Zero());
         std::vector<VoxelKey> out;
         for (std::size_t i = 0; i < s.field.keys().size(); i += 7) out.push_back(s.field.keys()[i]);
         return out;
@@ -69,7 +69,7 @@ void BM_PlaneAndConfidence(benchmark::State& state) {
     const auto solver = static_cast<EigenSolver>(state.range(0));
     std::vector<VoxelStats> stats;
     for (const VoxelKey& v : vertices()) stats.push_back(merge_neighbourhood(grid(), v, 3));
-    const ReconstructionConfig c;
+    const SurfaceConfig c;
     for (auto _ : state)
         for (std::size_t i = 0; i < stats.size(); ++i)
             benchmark::DoNotOptimize(evaluate_level(stats[i], 3, vertices()[i].cast<double>() * 0.2, c, Eigen::Vector3d::Zero(),
@@ -101,13 +101,13 @@ BENCHMARK(BM_PlaneEigen)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The whole TSDF stage: every candidate vertex (reference) vs the seeded fast path.
 void BM_TsdfReference(benchmark::State& state) {
-    for (auto _ : state) benchmark::DoNotOptimize(compute_tsdf(grid(), ReconstructionConfig{}, Eigen::Vector3d::Zero()).size());
+    for (auto _ : state) benchmark::DoNotOptimize(compute_tsdf(grid(), SurfaceConfig{}, Eigen::Vector3d::Zero()).size());
 }
 BENCHMARK(BM_TsdfReference)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 void BM_TsdfFast(benchmark::State& state) {
     for (auto _ : state)
-        benchmark::DoNotOptimize(compute_seeded_tsdf(grid(), ReconstructionConfig{}, Eigen::Vector3d::Zero()).cubes.size());
+        benchmark::DoNotOptimize(compute_seeded_tsdf(grid(), SurfaceConfig{}, Eigen::Vector3d::Zero()).cubes.size());
 }
 BENCHMARK(BM_TsdfFast)->Unit(benchmark::kMillisecond);
 

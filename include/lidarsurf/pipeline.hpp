@@ -14,10 +14,10 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
-#include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/map/free_space.hpp"
 #include "lidarsurf/map/live_mesh.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/reconstruction_config.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
@@ -52,7 +52,7 @@ class Reconstructor {
 public:
     /// Validates `config` (throws InvalidArgument). `sensor` orients the normals (Eq. 2).
     /// `grid_origin` (world) fixes the voxel lattice's local origin (VoxelGrid): by default the
-    /// first point integrated sets it; the parts of one map fused apart (map/tiles.hpp) all take
+    /// first point integrated sets it; the parts of one map fused apart (tiles/tiles.hpp) all take
     /// the one the whole map would have, so that their statistics agree to the last bit.
     Reconstructor(const ReconstructionConfig& config, const Eigen::Vector3d& sensor,
                   const std::optional<Eigen::Vector3d>& grid_origin = std::nullopt);
@@ -72,11 +72,11 @@ public:
     /// as seen from the constructor's sensor. Turning them on after points were integrated makes
     /// the next extraction evaluate every vertex again. Throws InvalidArgument if not finite.
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
-    /// A part of a map (map/tiles.hpp): of the scan's points seen from `viewpoint`, only those
+    /// A part of a map (tiles/tiles.hpp): of the scan's points seen from `viewpoint`, only those
     /// inside `keep` (world) are integrated, while free-space carving takes the whole scan (a ray
     /// through the part may return outside it). summary().points_read counts the points kept.
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep);
-    /// A scan of a sequence that reaches nothing of this grid (a part of a map, map/tiles.hpp):
+    /// A scan of a sequence that reaches nothing of this grid (a part of a map, tiles/tiles.hpp):
     /// free-space carving counts it, as it counts every scan of the drive.
     void skip_scan();
 
@@ -92,7 +92,7 @@ public:
 
     /// The mesh of the cubes that `owns` accepts (cube = its minimum corner, grid keys), with the
     /// surface search kept to `region` (SearchRegion): a part of a map meshed apart
-    /// (map/tiles.hpp). The same vertex values and marching cubes as extract_mesh(); the cubes are
+    /// (tiles/tiles.hpp). The same vertex values and marching cubes as extract_mesh(); the cubes are
     /// those the search reaches without leaving the region. Throws InvalidArgument without the
     /// seeded surface or with min_component_triangles (a filter over the whole map), InvalidInput
     /// if no point was integrated, ResourceLimit as extract_mesh() with the estimate of the region
@@ -130,13 +130,13 @@ private:
 
     /// The configuration the surface is extracted with: config_, without bridges on a grid
     /// fused from viewpoints (a map's scans fill in each other's rings).
-    ReconstructionConfig surface_config(bool from_viewpoints) const;
+    SurfaceConfig surface_config(bool from_viewpoints) const;
     /// Sets summary().memory_estimate (the grid, the previous field, the carver and what the
     /// extraction will allocate) and throws ResourceLimit when it passes the budget.
-    void check_extraction_budget(const ReconstructionConfig& config, Evaluation evaluation, const SearchRegion* region = nullptr);
+    void check_extraction_budget(const SurfaceConfig& config, Evaluation evaluation, const SearchRegion* region = nullptr);
     /// The fast path's field over the grid (reusing the previous one) or over `region`; its
     /// counts and time in the summary.
-    SeededTsdf seeded_field(const ReconstructionConfig& config, const SearchRegion* region);
+    SeededTsdf seeded_field(const SurfaceConfig& config, const SearchRegion* region);
     VertexPlacement vertex_placement() const;
     ReconstructionConfig config_;
     Eigen::Vector3d sensor_;
@@ -155,7 +155,7 @@ private:
 /// With `region` (the fast path's search kept to a part of the map, extract_mesh(region, owns)),
 /// only the grid's blocks within the region's bounding box, grown by the configuration's reach,
 /// are counted: what that search can pack and visit.
-std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const ReconstructionConfig& config, Evaluation evaluation,
+std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const SurfaceConfig& config, Evaluation evaluation,
                                       std::size_t limit = SIZE_MAX, const SearchRegion* region = nullptr);
 
 /// One-shot helper: integrate `cloud` and extract the mesh.

@@ -1,4 +1,4 @@
-// Bindings of map/tiles.hpp: a map fused in tiles, the pieces lidarsurf.fuse_tiles (tiles.py)
+// Bindings of tiles/tiles.hpp: a map fused in tiles, the pieces lidarsurf.fuse_tiles (tiles.py)
 // hands to Dask workers. The plan travels as an array of scan reaches (picklable), not as an object.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -10,7 +10,7 @@
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
-#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/tiles/tiles.hpp"
 #include "lidarsurf/pipeline.hpp"
 
 namespace py = pybind11;
@@ -128,7 +128,7 @@ void bind_tiles(py::module_& m) {
         "of. Reading a sequence's scans once, in pieces on many workers if it is long.");
 
     py::class_<TilePlan>(m, "TilePlan",
-                         "Which tiles a sequence's map has and which scans each takes (map/tiles.hpp), from the scans' reaches "
+                         "Which tiles a sequence's map has and which scans each takes (tiles/tiles.hpp), from the scans' reaches "
                          "(sequence_reaches), a Config and a TileConfig.")
         .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& reaches, const ReconstructionConfig& config,
                          const TileConfig& tiles) { return TilePlan(reaches_from(reaches), config, tiles); }),

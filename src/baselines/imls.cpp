@@ -14,13 +14,9 @@
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/core/format_value.hpp"
+#include "lidarsurf/core/stopwatch.hpp"
 
 namespace lidarsurf {
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 std::string ImlsSummary::to_string() const {
     char buf[512];
@@ -32,13 +28,13 @@ std::string ImlsSummary::to_string() const {
     return buf;
 }
 
-ImlsConfig ImlsConfig::matching(const ReconstructionConfig& config) {
+ImlsConfig ImlsConfig::matching(const SurfaceConfig& config, int threads) {
     ImlsConfig c;
     c.voxel_size = config.voxel_size;
     c.radius = config.voxel_size * config.max_level();
     c.normal_k = config.n_min;
     c.bandwidth = c.radius / 3.0;
-    c.threads = config.threads;
+    c.threads = threads;
     return c;
 }
 

@@ -42,7 +42,7 @@ std::vector<BenchmarkMethod> table_one_methods(const ReconstructionConfig& base)
     imls.name = "IMLS";
     imls.imls = true;
     imls.config = base;
-    imls.imls_config = ImlsConfig::matching(base);
+    imls.imls_config = ImlsConfig::matching(base, base.threads);
     imls.imls_config.validate();
     rows.push_back(std::move(imls));
     return rows;

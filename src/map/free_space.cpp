@@ -45,12 +45,20 @@ inline float elevation_deg(const Eigen::Vector3d& d) {
 
 }  // namespace
 
-FreeSpaceCarver::FreeSpaceCarver(double margin, int min_scans, double range, int stale_scans)
-    : margin_(margin), min_scans_(min_scans), range_(range), stale_scans_(stale_scans), sigma2_(0) {
-    if (stale_scans < 0) throw InvalidArgument("carving stale scans must be >= 0");
-    if (!std::isfinite(range) || range <= 0) throw InvalidArgument("carving range must be finite and > 0");
-    if (!std::isfinite(margin) || margin <= 0) throw InvalidArgument("carving margin must be finite and > 0");
-    if (min_scans < 1) throw InvalidArgument("carving min scans must be >= 1");
+namespace {
+const CarvingConfig& checked(const CarvingConfig& c) {
+    c.validate();
+    return c;
+}
+}  // namespace
+
+FreeSpaceCarver::FreeSpaceCarver(const CarvingConfig& config, double voxel_size)
+    : margin_(checked(config).carve_margin_voxels * voxel_size),
+      min_scans_(config.carve_min_scans),
+      range_(config.carve_range),
+      stale_scans_(config.carve_stale_scans),
+      sigma2_(0) {
+    if (!std::isfinite(voxel_size) || voxel_size <= 0) throw InvalidArgument("carving: voxel size must be finite and > 0");
 }
 
 void FreeSpaceCarver::fit(const VoxelStats& stats, Evidence& e) const {

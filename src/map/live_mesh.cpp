@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/core/stopwatch.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 
@@ -13,11 +14,10 @@ namespace lidarsurf {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-const ReconstructionConfig& checked(const ReconstructionConfig& c) {
-    LiveMesh::check(c);
-    return c;
+const SurfaceConfig& checked(const SurfaceConfig& surface, const LiveMeshConfig& live) {
+    LiveMesh::check(surface, live);
+    return surface;
 }
 
 bool less_zyx(const VoxelKey& a, const VoxelKey& b) { return std::tie(a.z(), a.y(), a.x()) < std::tie(b.z(), b.y(), b.x()); }
@@ -40,14 +40,15 @@ std::size_t MeshDelta::triangles() const {
     return n;
 }
 
-void LiveMesh::check(const ReconstructionConfig& config) {
-    config.validate();
-    if (!config.seeded_surface)
+void LiveMesh::check(const SurfaceConfig& surface, const LiveMeshConfig& live) {
+    surface.validate();
+    live.validate();
+    if (!surface.seeded_surface)
         throw InvalidArgument("the live mesh needs the seeded surface (the paper's method as written meshes every defined cube of the map)");
 }
 
-LiveMesh::LiveMesh(const ReconstructionConfig& config)
-    : config_(checked(config)), changes_(config.live_growth, config.live_reach_blocks) {}
+LiveMesh::LiveMesh(const SurfaceConfig& surface, const LiveMeshConfig& live)
+    : config_(checked(surface, live)), live_(live), changes_(live.live_growth, live.live_reach_blocks) {}
 
 MeshDelta LiveMesh::update(VoxelGrid& grid, const Eigen::Vector3d& sensor, const Eigen::Vector3d& position, double budget_seconds) {
     const auto t0 = Clock::now();
@@ -62,7 +63,7 @@ MeshDelta LiveMesh::update(VoxelGrid& grid, const Eigen::Vector3d& sensor, const
     if (!grid.has_origin()) return delta;
     // The urgent blocks (never meshed, or one of their voxels removed) first, then those whose
     // points changed; each group nearest `position` first.
-    std::vector<BlockChanges::Due> due = changes_.due_near(grid.to_local(position), grid.voxel_size(), config_.live_range);
+    std::vector<BlockChanges::Due> due = changes_.due_near(grid.to_local(position), grid.voxel_size(), live_.live_range);
     std::sort(due.begin(), due.end(), [](const BlockChanges::Due& a, const BlockChanges::Due& b) {
         if (a.urgent != b.urgent) return a.urgent;
         if (a.distance2 != b.distance2) return a.distance2 < b.distance2;
@@ -81,7 +82,7 @@ MeshDelta LiveMesh::update(VoxelGrid& grid, const Eigen::Vector3d& sensor, const
         const auto tb = Clock::now();
         std::vector<VoxelKey> core(count);
         for (std::size_t i = 0; i < count; ++i) core[i] = due[next + i].key;
-        const SearchRegion region = SearchRegion::around(core, config_.live_halo_cubes);
+        const SearchRegion region = SearchRegion::around(core, live_.live_halo_cubes);
         const SeededTsdf seeded = compute_seeded_tsdf(grid, config_, sensor, EigenSolver::ClosedForm, nullptr, &region);
         // The active cubes of each core block (the cubes come sorted (z, y, x), so each block's too).
         BlockIndex position_of;

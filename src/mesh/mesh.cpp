@@ -38,4 +38,22 @@ void Mesh::append(const Mesh& part) {
     for (const auto& t : part.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
 }
 
+void Mesh::append(const Mesh& part, std::span<const std::int64_t> existing) {
+    if (existing.size() != part.vertices.size()) throw InvalidArgument("Mesh::append: one entry of `existing` per vertex of the part");
+    std::vector<std::uint32_t> index(part.vertices.size());
+    for (std::size_t i = 0; i < part.vertices.size(); ++i) {
+        if (existing[i] >= 0) {
+            if (static_cast<std::size_t>(existing[i]) >= vertices.size()) throw InvalidArgument("Mesh::append: an existing vertex out of range");
+            index[i] = static_cast<std::uint32_t>(existing[i]);
+            continue;
+        }
+        index[i] = static_cast<std::uint32_t>(vertices.size());
+        vertices.push_back(part.vertices[i]);
+        if (!part.normals.empty()) normals.push_back(part.normals[i]);
+        if (!part.levels.empty()) levels.push_back(part.levels[i]);
+        if (!part.confidence.empty()) confidence.push_back(part.confidence[i]);
+    }
+    for (const auto& t : part.triangles) triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+}
+
 }  // namespace lidarsurf

@@ -49,7 +49,7 @@ std::vector<VoxelKey> candidate_vertices(const VoxelGrid& grid, int level) {
     return out;
 }
 
-TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
+TsdfField compute_tsdf(const VoxelGrid& grid, const SurfaceConfig& config, const Eigen::Vector3d& sensor_world,
                        TsdfStats* stats) {
     config.validate();
     const std::vector<VoxelKey> candidates = candidate_vertices(grid, config.max_level());

@@ -25,14 +25,14 @@ VertexSample make_sample(const LocalPlane& plane, const Eigen::Vector3d& v, int 
 
 // Whether v at `position` is one the bridges may define: bridges on, a single scan (a grid fused
 // from viewpoints has none), within bridge_range (horizontally) of the sensor.
-bool may_bridge(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const ReconstructionConfig& config, const VoxelGrid& grid) {
+bool may_bridge(const Eigen::Vector3d& position, const Eigen::Vector3d& sensor_local, const SurfaceConfig& config, const VoxelGrid& grid) {
     return config.bridges() && !grid.has_viewpoints() &&
            (position - sensor_local).head<2>().squaredNorm() <= config.bridge_range * config.bridge_range;
 }
 
 }  // namespace
 
-bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config) {
+bool rejected_by_invariants(const VoxelStats& stats, const SurfaceConfig& config) {
     // On the scatter S = n C rather than C (no division; fit_plane forms C itself): the planarity
     // bound is homogeneous of degree 2, and l3(C) > t^2 iff S - n t^2 I is positive definite.
     const Eigen::Matrix3d c = stats.scatter.full();
@@ -63,7 +63,7 @@ namespace {
 // the count, and a level failing on the count never switches to slabs, so skipping them changes
 // nothing); stats_of is then first called with it.
 template <typename StatsOf, typename SlabOf>
-VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vector3d& position, const SurfaceConfig& config,
                           const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver, int first_level = 1) {
     if (!config.adaptive())  // CN, CN+GC: only H^k.
         return evaluate_level(stats_of(config.k), config.k, position, config, sensor_local, min_lambda2, solver);
@@ -99,7 +99,7 @@ VertexSample choose_level(StatsOf&& stats_of, SlabOf&& slab_of, const Eigen::Vec
 }  // namespace
 
 VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vector3d& position,
-                            const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
+                            const SurfaceConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
                             EigenSolver solver) {
     if (stats.count < static_cast<std::uint64_t>(config.n_min)) return {};  // Eq. (1)
     if (solver == EigenSolver::ClosedForm && rejected_by_invariants(stats, config)) return {};
@@ -112,7 +112,7 @@ VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vec
     return make_sample(*plane, position, level, confidence);
 }
 
-VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const SurfaceConfig& config,
                              const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver) {
     // A ring on each side: half of Eq. (1) on either side of v.
     const auto half = static_cast<std::uint64_t>((config.n_min + 1) / 2);
@@ -135,14 +135,14 @@ VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, cons
     return make_sample(*plane, position, config.k_max, confidence);
 }
 
-Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const SurfaceConfig& config,
                                  const Eigen::Vector3d& sensor_local) {
     if (!grid.has_viewpoints()) return sensor_local;
     const int level = config.max_level();  // H^level(v) = [v - level, v + level - 1]
     return grid.mean_viewpoint(v.array() - level, v.array() + (level - 1)).value_or(sensor_local);
 }
 
-VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const SurfaceConfig& config,
                              const Eigen::Vector3d& sensor) {
     const Eigen::Vector3d sensor_local = vertex_viewpoint(grid, v, config, sensor);
     VoxelStats acc, slab;
@@ -167,7 +167,7 @@ VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const Rec
 
 namespace {
 
-VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey& v, const SurfaceConfig& config,
                                const Eigen::Vector3d& sensor, EigenSolver solver) {
     const Eigen::Vector3d sensor_local = vertex_viewpoint(window.grid(), v, config, sensor);
     const Eigen::Vector3d position = v.cast<double>() * window.voxel_size();
@@ -211,7 +211,7 @@ VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey
 // its register copies go) and the window's AVX2 walk inline. AVX2 brings no FMA: the same
 // operations, so the same bits as the baseline build (tests/surface/test_vertex_evaluator.cpp).
 [[gnu::target(LIDARSURF_AVX2_TARGET), gnu::flatten]] VertexSample evaluate_windowed_v3(const NeighbourhoodWindow& window, const VoxelKey& v,
-                                                                                     const ReconstructionConfig& config,
+                                                                                     const SurfaceConfig& config,
                                                                                      const Eigen::Vector3d& sensor, EigenSolver solver) {
     return evaluate_windowed(window, v, config, sensor, solver);
 }
@@ -219,7 +219,7 @@ VertexSample evaluate_windowed(const NeighbourhoodWindow& window, const VoxelKey
 
 }  // namespace
 
-VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const SurfaceConfig& config,
                              const Eigen::Vector3d& sensor, EigenSolver solver) {
 #if defined(LIDARSURF_EVALUATE_V3)
     if (window.simd() >= SimdLevel::Avx2) return evaluate_windowed_v3(window, v, config, sensor, solver);

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "lidarsurf/core/errors.hpp"
-#include "lidarsurf/io/live_stream.hpp"
+#include "lidarsurf/viz/live_stream.hpp"
 
 namespace lidarsurf {
 

@@ -18,7 +18,7 @@ using namespace lidarsurf;
 
 namespace {
 
-const double kAlpha = ReconstructionConfig{}.voxel_size;
+const double kAlpha = SurfaceConfig{}.voxel_size;
 
 // A plane sampled uniformly (isotropically) with 1 cm noise. IMLS normals come from the k = 10
 // nearest neighbours; on a 64-beam scan these all lie on one ring, a line with no normal
@@ -136,8 +136,9 @@ TEST(Imls, VisibleSphereMeshLiesOnTheSphere) {
 }
 
 TEST(Imls, ConfigMatchesThePaperAndRejectsBadValues) {
-    ReconstructionConfig rc;
-    const ImlsConfig m = ImlsConfig::matching(rc);
+    SurfaceConfig rc;
+    const ImlsConfig m = ImlsConfig::matching(rc, 2);
+    EXPECT_EQ(m.threads, 2);
     EXPECT_DOUBLE_EQ(m.radius, rc.voxel_size * rc.k_max);  // r = alpha k_max = 1 m
     EXPECT_EQ(m.normal_k, rc.n_min);
     EXPECT_DOUBLE_EQ(m.bandwidth, m.radius / 3);

@@ -113,7 +113,7 @@ expect 2 "add --live" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live-check-every 5
 expect 2 "live growth" -- "$cli" fuse "$seq" -o "$dir/x.ply" --live --live-growth -1
 expect 4 "velodyne|cannot|no such" -- "$cli" fuse "$dir/nothere" -o "$dir/x.ply"
 # fuse --tile-size: the map in tiles, written tile by tile, is the whole map's mesh (the same
-# counts here; tests/map/test_tiles.cpp and python/tests/test_tiles.py compare the triangles),
+# counts here; tests/tiles/test_tiles.cpp and python/tests/test_tiles.py compare the triangles),
 # and leaves no temporary behind.
 expect 0 "frames fused in [0-9]+ tiles of 20 m" -- "$cli" fuse "$seq" -o "$dir/tiled.ply" --tile-size 20 --json "$dir/tiled.json"
 check "fuse --tile-size writes the whole map's vertex and face counts" -- \

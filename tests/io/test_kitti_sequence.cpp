@@ -8,7 +8,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
-#include "lidarsurf/io/png_writer.hpp"
+#include "lidarsurf/viz/png_writer.hpp"
 #include "test_util.hpp"
 
 using namespace lidarsurf;

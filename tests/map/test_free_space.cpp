@@ -18,6 +18,16 @@ using namespace lidarsurf::test::street;
 
 namespace {
 
+// A carver of the 0.2 m grids below; the margin in metres (0.4 m: 2 voxels).
+FreeSpaceCarver carver_of(double margin, int min_scans, double range, int stale_scans = 0) {
+    CarvingConfig c;
+    c.carve_margin_voxels = margin / 0.2;
+    c.carve_min_scans = min_scans;
+    c.carve_range = range;
+    c.carve_stale_scans = stale_scans;
+    return FreeSpaceCarver(c, 0.2);
+}
+
 struct Counts {
     std::size_t trail = 0, static_voxels = 0;
 };
@@ -59,7 +69,7 @@ TEST(FreeSpace, CarvesAMovingCarsTrailAndKeepsTheGroundTheWallAndAPole) {
     VoxelGrid carved(0.2), kept(0.2);
     carved.enable_viewpoints(sensor_at(0));
     kept.enable_viewpoints(sensor_at(0));
-    FreeSpaceCarver carver(0.4, 2, 40.0);
+    FreeSpaceCarver carver = carver_of(0.4, 2, 40.0);
     std::size_t removed = 0;
     for (int i = 0; i < kScans; ++i) {
         const std::vector<Eigen::Vector3d> points = scan(i, true);
@@ -82,7 +92,7 @@ TEST(FreeSpace, CarvesAMovingCarsTrailAndKeepsTheGroundTheWallAndAPole) {
     // Without the car, nothing is carved at all from the static street.
     VoxelGrid empty_street(0.2);
     empty_street.enable_viewpoints(sensor_at(0));
-    FreeSpaceCarver quiet(0.4, 2, 40.0);
+    FreeSpaceCarver quiet = carver_of(0.4, 2, 40.0);
     std::size_t static_removed = 0;
     for (int i = 0; i < kScans; ++i) {
         const std::vector<Eigen::Vector3d> points = scan(i, false);
@@ -135,9 +145,9 @@ TEST(FreeSpace, IncrementalMeshesEqualTheOnePassMesh) {
 }
 
 TEST(FreeSpace, RejectsBadParameters) {
-    EXPECT_THROW(FreeSpaceCarver(0, 2, 40), InvalidArgument);
-    EXPECT_THROW(FreeSpaceCarver(0.4, 0, 40), InvalidArgument);
-    EXPECT_THROW(FreeSpaceCarver(0.4, 2, std::nan("")), InvalidArgument);
+    EXPECT_THROW(carver_of(0, 2, 40), InvalidArgument);
+    EXPECT_THROW(carver_of(0.4, 0, 40), InvalidArgument);
+    EXPECT_THROW(carver_of(0.4, 2, std::nan("")), InvalidArgument);
     ReconstructionConfig c;
     c.carve_margin_voxels = 0.1;
     EXPECT_THROW(c.validate(), InvalidArgument);
@@ -150,7 +160,7 @@ TEST(FreeSpace, RejectsBadParameters) {
     c = {};
     c.carve_stale_scans = -1;
     EXPECT_THROW(c.validate(), InvalidArgument);
-    EXPECT_THROW(FreeSpaceCarver(0.4, 2, 40.0, -1), InvalidArgument);
+    EXPECT_THROW(carver_of(0.4, 2, 40.0, -1), InvalidArgument);
 }
 
 // A car parked for the first half of the drive, then gone; another parked all along; the pole. The
@@ -195,7 +205,7 @@ TEST(FreeSpace, SkippingScansThatReachNothingIsCarvingThem) {
     constexpr int kStale = 8, kAway = 6;
     struct Run {
         VoxelGrid grid{0.2};
-        FreeSpaceCarver carver{0.4, 2, 40.0, kStale};
+        FreeSpaceCarver carver = carver_of(0.4, 2, 40.0, kStale);
         std::size_t removed = 0;
     };
     const Eigen::Vector3d away(5000, 0, 0);

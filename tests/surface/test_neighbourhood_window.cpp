@@ -136,7 +136,7 @@ TEST(NeighbourhoodWindow, VertexEvaluationEqualsTheReference) {
     const Eigen::Vector3d sensor = grid.to_local(grid.origin() + Eigen::Vector3d(0.5, -0.3, 2.0));
     std::size_t defined = 0, compared = 0;
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
-        ReconstructionConfig config;
+        SurfaceConfig config;
         config.mode = mode;
         config.k = 3;
         for (EigenSolver solver : {EigenSolver::Iterative, EigenSolver::ClosedForm})
@@ -172,7 +172,7 @@ TEST(NeighbourhoodWindow, VertexEvaluationIsTheSameBitsAtEverySimdLevel) {
     const std::vector<SimdLevel> levels = test::simd_levels();
     std::size_t defined = 0, compared = 0;
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Constant}) {
-        ReconstructionConfig config;
+        SurfaceConfig config;
         config.mode = mode;
         for (int z = -3; z <= 3; ++z)
             for (int y = -14; y <= 14; y += 3)

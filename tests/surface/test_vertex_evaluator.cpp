@@ -34,8 +34,8 @@ VoxelGrid crafted_grid() {
     return fresh;
 }
 
-ReconstructionConfig config_for(Mode mode, int k) {
-    ReconstructionConfig c;
+SurfaceConfig config_for(Mode mode, int k) {
+    SurfaceConfig c;
     c.mode = mode;
     c.k = k;
     c.validate();
@@ -83,7 +83,7 @@ TEST(VertexEvaluator, NoPointsWithinKMaxLeavesTheVertexUndefined) {
     const VoxelGrid g = crafted_grid();
     EXPECT_FALSE(evaluate_vertex(g, {20, 0, 0}, config_for(Mode::Adaptive, 5), kSensor).defined);
     // N_min above the number of points: never defined.
-    ReconstructionConfig c = config_for(Mode::Adaptive, 5);
+    SurfaceConfig c = config_for(Mode::Adaptive, 5);
     c.n_min = 251;  // 250 points in all
     EXPECT_FALSE(evaluate_vertex(g, {0, 0, 0}, c, kSensor).defined);
 }
@@ -106,7 +106,7 @@ TEST(VertexEvaluator, ThicknessGuardRejectsAStepAndKeepsANoisyPlane) {
         const auto direct = test::direct_stats(pts);
         return std::make_pair(st, std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(direct.cov).eigenvalues()[0]));
     };
-    ReconstructionConfig c;  // alpha 0.2, max_thickness 0.6 voxels = 0.12 m
+    SurfaceConfig c;  // alpha 0.2, max_thickness 0.6 voxels = 0.12 m
     const Eigen::Vector3d v(0, 0, 0.1), sensor(0, 0, 5);
     const auto [step, step_thickness] = stats_of(0.3, 0);
     EXPECT_NEAR(step_thickness, 0.15, 5e-3);  // h / 2, less a slight tilt the random x, y allow
@@ -148,7 +148,7 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
     const VoxelGrid g = crafted_street();
     const VoxelKey v(3, 0, 1);
     const Eigen::Vector3d sensor(-3.0, 0.0, 1.7);
-    ReconstructionConfig c;  // the default: slab fallback from level 3, here with square slabs
+    SurfaceConfig c;  // the default: slab fallback from level 3, here with square slabs
     c.slab_radial_extension = 0;
     const VertexSample s = evaluate_vertex(g, v, c, sensor);
     ASSERT_TRUE(s.defined);
@@ -186,7 +186,7 @@ TEST(VertexEvaluator, SlabFallbackFindsTheGroundBesideARaisedObject) {
     EXPECT_EQ(none.level, 3);
     EXPECT_LT(none.tsdf, 0.0f);
     // The constant modes have one level: no fallback.
-    c = ReconstructionConfig{};
+    c = SurfaceConfig{};
     c.mode = Mode::ConstantGaussian;
     c.k = 4;
     EXPECT_FALSE(evaluate_vertex(g, v, c, sensor).defined);
@@ -201,7 +201,7 @@ TEST(VertexEvaluator, RadialSlabsReachTheNextRingAcrossTheScanLines) {
     const VoxelGrid g = crafted_street();
     const VoxelKey v(3, 0, 1);
     const Eigen::Vector3d position(0.6, 0.0, 0.2);
-    ReconstructionConfig c;
+    SurfaceConfig c;
     c.slab_radial_extension = 3;
     c.bridge_reach = 0;  // the slabs alone
     const PackedVoxels packed(g);
@@ -252,8 +252,8 @@ TEST(VertexEvaluator, BridgesJoinTwoRingsThatAgree) {
     const Eigen::Vector3d position = v.cast<double>() * 0.2;
     const Eigen::Vector3d n = Eigen::Vector3d(-0.1, 0, 1).normalized();
     const double truth = n.dot(position - Eigen::Vector3d(0, 0, ground_z(0)));
-    ReconstructionConfig c;
-    auto both_paths = [&](const VoxelGrid& g, const ReconstructionConfig& config) {
+    SurfaceConfig c;
+    auto both_paths = [&](const VoxelGrid& g, const SurfaceConfig& config) {
         const PackedVoxels packed(g);
         const NeighbourhoodWindow window(packed, BlockMap<std::int32_t>::block_of(v), config.max_reach());
         return std::array<VertexSample, 3>{evaluate_vertex(g, v, config, sensor), evaluate_vertex(window, v, config, sensor, EigenSolver::Iterative),
@@ -267,7 +267,7 @@ TEST(VertexEvaluator, BridgesJoinTwoRingsThatAgree) {
         EXPECT_GT(s.confidence, 0.0f);
     }
     // Without bridges, or in AN (no Eq. (3) to mark the inferred surface), nothing defines v.
-    ReconstructionConfig off = c;
+    SurfaceConfig off = c;
     off.bridge_reach = 0;
     for (const VertexSample& s : both_paths(street(false, false), off)) EXPECT_FALSE(s.defined);
     off = c;
@@ -289,7 +289,7 @@ TEST(VertexEvaluator, BridgesJoinTwoRingsThatAgree) {
 
 TEST(Config, PaperTurnsEveryGuardOff) {
     for (Mode mode : {Mode::AdaptiveGaussian, Mode::Adaptive, Mode::ConstantGaussian, Mode::Constant}) {
-        const ReconstructionConfig p = ReconstructionConfig::paper(mode);
+        const SurfaceConfig p = SurfaceConfig::paper(mode);
         EXPECT_NO_THROW(p.validate());
         EXPECT_EQ(p.mode, mode);
         EXPECT_EQ(p.min_planarity, 0);
@@ -306,7 +306,7 @@ TEST(Config, PaperTurnsEveryGuardOff) {
         EXPECT_EQ(p.n_min, 10);
         EXPECT_EQ(p.k_max, 5);
     }
-    ReconstructionConfig c;
+    SurfaceConfig c;
     c.voxel_size = 0.1;
     c.make_paper_literal();
     EXPECT_EQ(c.voxel_size, 0.1);
@@ -314,10 +314,10 @@ TEST(Config, PaperTurnsEveryGuardOff) {
 }
 
 TEST(Config, ValidateRejectsAbsurdParameters) {
-    ReconstructionConfig ok;
+    SurfaceConfig ok;
     EXPECT_NO_THROW(ok.validate());
     auto bad = [](auto mutate) {
-        ReconstructionConfig c;
+        SurfaceConfig c;
         mutate(c);
         return c;
     };
@@ -344,7 +344,7 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
     EXPECT_NO_THROW(bad([](auto& c) { c.bridge_reach = 0; }).validate());
     // The neighbourhoods' reach: the bridges' in AN+GC, the slabs' extension only where slabs are
     // tried; k_max + the bridges' reach is capped at the windows' 64 voxels.
-    ReconstructionConfig r;
+    SurfaceConfig r;
     EXPECT_EQ(r.max_reach(), r.k_max + r.bridge_reach);
     r.bridge_reach = 64;
     EXPECT_EQ(r.bridge_extent(), 64 - r.k_max);
@@ -357,10 +357,10 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
     EXPECT_EQ(r.max_reach(), r.k_max + r.slab_radial_extension);
     r.slab_from_level = 0;
     EXPECT_EQ(r.max_reach(), r.k_max);
-    r = ReconstructionConfig{};
+    r = SurfaceConfig{};
     r.mode = Mode::ConstantGaussian;
     EXPECT_EQ(r.max_reach(), r.k);
-    EXPECT_EQ(ReconstructionConfig::paper().max_reach(), ReconstructionConfig::paper().k_max);
+    EXPECT_EQ(SurfaceConfig::paper().max_reach(), SurfaceConfig::paper().k_max);
     EXPECT_EQ(parse_mode("AN+GC"), Mode::AdaptiveGaussian);
     EXPECT_EQ(parse_mode("cn"), Mode::Constant);
     EXPECT_THROW(parse_mode("imls"), InvalidArgument);
@@ -380,7 +380,7 @@ TEST(Config, ValidateRejectsAbsurdParameters) {
 TEST(VertexEvaluator, InvariantPreCheckOnlyRejectsWhatTheEigenvaluesReject) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> angle(0.0, 6.283185307179586), unit(0.0, 1.0);
-    ReconstructionConfig c;  // default guards: planarity 0.05, thickness 0.6 voxels
+    SurfaceConfig c;  // default guards: planarity 0.05, thickness 0.6 voxels
     const double t2 = std::pow(c.max_thickness * c.voxel_size, 2);
     int rejected = 0, lines = 0, lines_rejected = 0;
     for (int i = 0; i < 20000; ++i) {
@@ -411,5 +411,5 @@ TEST(VertexEvaluator, InvariantPreCheckOnlyRejectsWhatTheEigenvaluesReject) {
     blob.count = 50;
     blob.scatter = SymmetricMatrix3::upper_of(50.0 * Eigen::Matrix3d(Eigen::Vector3d(1.0, 1e-9, 1e-9).asDiagonal()));
     EXPECT_TRUE(rejected_by_invariants(blob, c));
-    EXPECT_FALSE(rejected_by_invariants(blob, ReconstructionConfig::paper(Mode::AdaptiveGaussian)));
+    EXPECT_FALSE(rejected_by_invariants(blob, SurfaceConfig::paper(Mode::AdaptiveGaussian)));
 }

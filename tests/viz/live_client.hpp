@@ -1,12 +1,12 @@
 #pragma once
-// A client of the live stream for the tests: decodes the messages (io/live_stream.hpp) into its
+// A client of the live stream for the tests: decodes the messages (viz/live_stream.hpp) into its
 // own copy of the blocks, and compares blocks with what was published (float32 positions).
 #include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
-#include "lidarsurf/io/live_stream.hpp"
+#include "lidarsurf/viz/live_stream.hpp"
 #include "lidarsurf/map/live_mesh.hpp"
 
 namespace lidarsurf::test {

@@ -19,19 +19,19 @@
 namespace lidarsurf {
 
 /// IMLS settings. The defaults are the paper's comparable choice: r = alpha * k_max, k = N_min,
-/// h = r / 3, derived from the ReconstructionConfig defaults (see matching()).
+/// h = r / 3, derived from the SurfaceConfig defaults (see matching()).
 struct ImlsConfig {
-    double voxel_size = ReconstructionConfig{}.voxel_size;  ///< lattice step alpha, metres
-    double radius = ReconstructionConfig{}.voxel_size * ReconstructionConfig{}.k_max;  ///< r, metres
-    int normal_k = ReconstructionConfig{}.n_min;  ///< k nearest neighbours for the normals
+    double voxel_size = SurfaceConfig{}.voxel_size;  ///< lattice step alpha, metres
+    double radius = SurfaceConfig{}.voxel_size * SurfaceConfig{}.k_max;  ///< r, metres
+    int normal_k = SurfaceConfig{}.n_min;  ///< k nearest neighbours for the normals
     double bandwidth = radius / 3.0;             ///< h, metres
     /// |f| beyond this many voxels leaves the vertex undefined; 0 (the paper) keeps every vertex.
     double truncation_voxels = 0.0;
     int threads = 0;  ///< 0 = all cores
 
-    /// The settings that make IMLS comparable to `config`: same alpha and threads,
-    /// r = alpha * k_max (max_level for the constant modes), k = N_min, h = r / 3.
-    static ImlsConfig matching(const ReconstructionConfig& config);
+    /// The settings that make IMLS comparable to `config`: same alpha, r = alpha * k_max
+    /// (max_level for the constant modes), k = N_min, h = r / 3; `threads` workers.
+    static ImlsConfig matching(const SurfaceConfig& config, int threads);
 
     /// Throws InvalidArgument naming the first bad field.
     void validate() const;

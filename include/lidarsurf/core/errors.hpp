@@ -30,7 +30,7 @@ public:
     using Error::Error;
 };
 
-/// The work would exceed a resource budget (ReconstructionConfig::max_memory_mb). The message
+/// The work would exceed a resource budget (RunConfig::max_memory_mb, in ReconstructionConfig). The message
 /// carries the estimate, so the user can raise the budget or coarsen the voxel size.
 class ResourceLimit : public Error {
 public:

@@ -1,5 +1,5 @@
 #pragma once
-// A mesh written part by part (the tiles of a map, map/tiles.hpp): memory holds one part, never
+// A mesh written part by part (the tiles of a map, tiles/tiles.hpp): memory holds one part, never
 // the whole mesh. The output appears whole at commit() or not at all, as write_mesh's: PLY's
 // header counts come first, so its vertex and face records wait in a temporary directory beside
 // the output until commit() writes the header and copies them behind it; OBJ goes straight to

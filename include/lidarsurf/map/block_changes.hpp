@@ -1,6 +1,6 @@
 #pragma once
 // Which blocks of a fused map need meshing again (docs/method.md, "Live mesh"). A vertex's TSDF
-// depends on the voxels within ReconstructionConfig::max_reach() of it; a block of the mesh (an
+// depends on the voxels within SurfaceConfig::max_reach() of it; a block of the mesh (an
 // 8^3 block of cubes, the grid's block) is re-meshed when
 //  - one of its own voxels was removed (free-space carving: what moved must go at once; the
 //    blocks around it count the removed points as a change, below), or

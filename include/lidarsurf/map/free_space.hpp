@@ -30,9 +30,28 @@
 
 #include <Eigen/Core>
 
+#include "lidarsurf/core/setting.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 
 namespace lidarsurf {
+
+/// Free-space carving's settings, one line each (core/setting.hpp). Carving acts only on scans
+/// integrated with a viewpoint (Reconstructor::integrate(points, viewpoint)): a single scan is
+/// never carved.
+// clang-format off
+#define LIDARSURF_CARVING_SETTINGS(X) \
+    X(bool, carve, true, 0, 1, kClosed, 0, "carve", "", "", "Sequences: remove voxels that later rays went through, the trails of moving objects (0 = keep every point; a single scan is never carved)") \
+    X(double, carve_margin_voxels, 2.0, 0.5, 1e3, kClosed, kKeep, "carve margin", "voxels", "", "Carving: a ray counts only if it returned this many voxels behind the voxel's surface") \
+    X(int, carve_min_scans, 2, 1, 65535, kClosed, kKeep, "carve min scans", "", "", "Carving: scans that must see through a voxel (and more than hit it) before it is removed") \
+    X(double, carve_range, 40.0, 0, 1e4, kAboveLow, kKeep, "carve range", "m", "", "Carving: the voxels within this distance of each scan's sensor are tested against it (metres)") \
+    X(int, carve_stale_scans, 6, 0, 65535, kClosed, kKeep, "carve stale scans", "", "", "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its plane, as a surface that stood and is gone (0 = never)")
+// clang-format on
+
+struct CarvingConfig {
+    LIDARSURF_SETTINGS(CarvingConfig, LIDARSURF_CARVING_SETTINGS)
+    /// Throws InvalidArgument naming the first bad field.
+    void validate() const { check_settings(); }
+};
 
 struct CarvingStats {
     std::size_t rays = 0;       ///< pixels of the range image
@@ -47,10 +66,11 @@ public:
     /// Voxels hit by at most this many scans are tested beyond `range` too.
     static constexpr int kYoungHits = 2;
 
-    /// `margin` in metres (> 0); `min_scans` >= 1; voxels farther than `range` (metres, > 0)
-    /// from a scan's viewpoint are not tested against it; a planar voxel not hit for
-    /// `stale_scans` scans (> 0) is tested as a thick one is (ReconstructionConfig::carve_stale_scans).
-    FreeSpaceCarver(double margin, int min_scans, double range, int stale_scans = 0);
+    /// Carves as `config` says (validated: InvalidArgument) on a grid of `voxel_size` metres:
+    /// the margin is carve_margin_voxels voxels; voxels farther than carve_range from a scan's
+    /// viewpoint are not tested against it; a planar voxel not hit for carve_stale_scans scans
+    /// (> 0) is tested as a thick one is.
+    FreeSpaceCarver(const CarvingConfig& config, double voxel_size);
 
     /// After `grid.insert(points, viewpoint, &hits)` of one scan: counts the hits, tests the
     /// voxels within range against the scan's returns seen from `viewpoint` (world), counts the
@@ -60,7 +80,7 @@ public:
 
     /// Counts `scans` scans that reach none of the grid's voxels (none of their returns, and
     /// so no ray, comes within their range of one): what carve() would do with them, without the
-    /// range image. A part of a map fused alone (map/tiles.hpp) keeps the drive's scan count,
+    /// range image. A part of a map fused alone (tiles/tiles.hpp) keeps the drive's scan count,
     /// which staleness is measured in, and drops the young voxels such a scan leaves behind.
     void skip(std::uint32_t scans = 1) {
         scan_ += scans;

@@ -22,12 +22,28 @@
 #include <Eigen/Core>
 
 #include "lidarsurf/core/block_map.hpp"
+#include "lidarsurf/core/setting.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/map/block_changes.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/surface/config.hpp"
 
 namespace lidarsurf {
+
+/// The live mesh's settings, one line each (core/setting.hpp).
+// clang-format off
+#define LIDARSURF_LIVE_MESH_SETTINGS(X) \
+    X(double, live_growth, 0.25, 0, 1e3, kClosed, kKeep, "live growth", "", "", "Live mesh: re-mesh a block when the points within live_reach_blocks of it changed (inserted or carved) by this fraction since it was meshed, at once when one of its own voxels was carved") \
+    X(double, live_range, 50.0, 0, 1e4, kAboveLow, kKeep, "live range", "m", "", "Live mesh: blocks farther than this from the sensor (metres) wait until it comes back near them") \
+    X(int, live_reach_blocks, 1, 0, 4, kClosed, kKeep, "live reach blocks", "", "", "Live mesh: a block depends on the changes (points, removed voxels) within this many blocks (8 voxels) of it") \
+    X(int, live_halo_cubes, 0, 0, 64, kClosed, kKeep, "live halo cubes", "", "", "Live mesh: the surface search of the blocks being meshed reaches this many cubes beyond them")
+// clang-format on
+
+struct LiveMeshConfig {
+    LIDARSURF_SETTINGS(LiveMeshConfig, LIDARSURF_LIVE_MESH_SETTINGS)
+    /// Throws InvalidArgument naming the first bad field.
+    void validate() const { check_settings(); }
+};
 
 /// One block of the live mesh: the grid block `key` (cubes 8 key to 8 key + 7) and the triangles
 /// of its cubes, in world coordinates, vertices welded within the block.
@@ -49,11 +65,12 @@ struct MeshDelta {
 
 class LiveMesh {
 public:
-    /// Throws InvalidArgument if `config` is invalid or meshes without the seeded surface (the
-    /// paper as written meshes every defined cube of the map: there is no block-local form of it).
-    explicit LiveMesh(const ReconstructionConfig& config);
+    /// Throws InvalidArgument if a configuration is invalid or `surface` meshes without the seeded
+    /// surface (the paper as written meshes every defined cube of the map: there is no
+    /// block-local form of it).
+    LiveMesh(const SurfaceConfig& surface, const LiveMeshConfig& live);
     /// The constructor's check alone, for a caller that refuses a configuration before any work.
-    static void check(const ReconstructionConfig& config);
+    static void check(const SurfaceConfig& surface, const LiveMeshConfig& live);
 
     /// Reads what changed in `grid` since the last call (takes the grid's journal; the first call
     /// starts it and takes every block the grid holds as changed), then meshes the due blocks
@@ -74,7 +91,8 @@ public:
     std::size_t memory_bytes() const;
 
 private:
-    ReconstructionConfig config_;
+    SurfaceConfig config_;
+    LiveMeshConfig live_;
     BlockChanges changes_;
     bool started_ = false;
     BlockIndex index_;              // block key -> blocks_
@@ -92,7 +110,7 @@ void apply(std::span<const VoxelKey> removed, std::span<const MeshBlock> changed
 Mesh concatenate(const std::vector<MeshBlock>& blocks);
 /// A mesh cut into the live mesh's blocks: each triangle goes to the block of the cube holding
 /// its centroid, on the lattice whose vertex (0, 0, 0) is at `origin` (world) with spacing
-/// `voxel_size` (the grid's: VoxelGrid::origin(), ReconstructionConfig::voxel_size). Vertices
+/// `voxel_size` (the grid's: VoxelGrid::origin(), SurfaceConfig::voxel_size). Vertices
 /// and their attributes are copied into each block that uses them; blocks in (z, y, x) key order.
 /// What a viewer of the live mesh is given of the exact mesh, block for block.
 std::vector<MeshBlock> split_into_blocks(const Mesh& mesh, const Eigen::Vector3d& origin, double voxel_size);

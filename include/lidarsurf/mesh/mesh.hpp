@@ -3,6 +3,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -24,6 +25,10 @@ struct Mesh {
     /// Appends `part`: its vertices (with their attributes) after this mesh's, its triangles
     /// renumbered to them. Shared vertices are not merged.
     void append(const Mesh& part);
+    /// Appends `part` welded onto this mesh: a vertex of `part` whose `existing` entry is >= 0 is
+    /// this mesh's vertex of that index and is not appended again; the others are appended in
+    /// order (the numbering of MeshStreamWriter::append and SeamWelder::weld).
+    void append(const Mesh& part, std::span<const std::int64_t> existing);
 };
 
 }  // namespace lidarsurf

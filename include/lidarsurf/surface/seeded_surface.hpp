@@ -19,6 +19,8 @@
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 
+#include "lidarsurf/surface/search_region.hpp"
+
 namespace lidarsurf {
 
 /// Cube with minimum corner `base` is *active* when its 8 corners are defined and their signs
@@ -60,33 +62,7 @@ struct SeededTsdf {
 /// memoised, Chan merges, iterative eigen solver). For configurations whose vertices can be
 /// defined beyond H^{k_max} of the data (bridges), where compute_tsdf's candidates would miss
 /// them; the same cubes and values as the fast path.
-SeededTsdf reference_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world);
-
-/// A part of the lattice the surface search is kept to: per 8^3 block of cubes, the mask of
-/// the cubes in it (cube i = the cube with minimum corner i, BlockMask layout). What a live mesh
-/// re-meshes of a large map: some blocks, and a margin of cubes around them so that the surface
-/// reaching them from their neighbours is found.
-class SearchRegion {
-public:
-    /// The blocks `core` (block keys) whole, and the cubes within `halo` cubes (Chebyshev
-    /// distance, >= 0) of them.
-    static SearchRegion around(std::span<const VoxelKey> core, int halo);
-    /// Adds the cubes of `mask` in block `block`.
-    void add(const VoxelKey& block, const BlockMask& mask);
-    bool contains(const VoxelKey& cube) const {
-        const std::uint32_t i = index_.find(BlockMap<std::int32_t>::block_of(cube));
-        if (i == BlockIndex::kAbsent) return false;
-        const int offset = BlockMap<std::int32_t>::offset_of(cube);
-        return (masks_[i][static_cast<std::size_t>(offset >> 6)] >> (offset & 63)) & 1u;
-    }
-    const std::vector<VoxelKey>& blocks() const { return blocks_; }
-    const BlockMask& mask(std::size_t i) const { return masks_[i]; }
-
-private:
-    BlockIndex index_;
-    std::vector<VoxelKey> blocks_;
-    std::vector<BlockMask> masks_;
-};
+SeededTsdf reference_seeded_tsdf(const VoxelGrid& grid, const SurfaceConfig& config, const Eigen::Vector3d& sensor_world);
 
 /// The fast path: the same cubes and the same values at their corners (up to rounding) as
 /// compute_tsdf followed by seeded_cubes, evaluating only the vertices the search touches (each
@@ -109,7 +85,7 @@ private:
 /// value depends on the voxels, not on the search), and the cubes found are those the search
 /// reaches without leaving the region (a subset of the unrestricted search's, equal to it when
 /// the region holds every cube the surface of its seeds runs through). Not with `previous`.
-SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config, const Eigen::Vector3d& sensor_world,
+SeededTsdf compute_seeded_tsdf(const VoxelGrid& grid, const SurfaceConfig& config, const Eigen::Vector3d& sensor_world,
                                EigenSolver solver = EigenSolver::ClosedForm, const TsdfField* previous = nullptr,
                                const SearchRegion* region = nullptr);
 

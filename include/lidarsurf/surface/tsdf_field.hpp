@@ -121,7 +121,7 @@ TsdfField assemble_field(const VoxelGrid& grid, const std::vector<VoxelKey>& can
                          const std::vector<VertexSample>& samples, const Truncation& truncation, TsdfStats* stats = nullptr);
 
 /// Evaluates every candidate vertex (in parallel) and keeps the defined ones.
-TsdfField compute_tsdf(const VoxelGrid& grid, const ReconstructionConfig& config,
+TsdfField compute_tsdf(const VoxelGrid& grid, const SurfaceConfig& config,
                        const Eigen::Vector3d& sensor_world, TsdfStats* stats = nullptr);
 
 }  // namespace lidarsurf

@@ -39,7 +39,7 @@ struct Truncation {
     }
 };
 /// The truncation of a reconstruction: `config`'s distance, along the normal on a grid with viewpoints.
-inline Truncation truncation_of(const ReconstructionConfig& config, const VoxelGrid& grid) {
+inline Truncation truncation_of(const SurfaceConfig& config, const VoxelGrid& grid) {
     return {config.truncation_distance(), grid.has_viewpoints()};
 }
 
@@ -47,25 +47,25 @@ inline Truncation truncation_of(const ReconstructionConfig& config, const VoxelG
 /// `sensor_local` (the sensor, local frame), or on a grid with viewpoints (several sensor
 /// positions) the point-weighted mean viewpoint of H^{max_level}(v), `sensor_local` when that box
 /// is empty. Both evaluations below start with it (docs/method.md, "Sequences").
-Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+Eigen::Vector3d vertex_viewpoint(const VoxelGrid& grid, const VoxelKey& v, const SurfaceConfig& config,
                                  const Eigen::Vector3d& sensor_local);
 
 /// Evaluates vertex `v` of `grid` with `config` (already validated). `sensor_local` is the sensor
 /// position in the grid's local frame. The reference: Chan merges over the grid, iterative eigen
 /// solver.
-VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const ReconstructionConfig& config,
+VertexSample evaluate_vertex(const VoxelGrid& grid, const VoxelKey& v, const SurfaceConfig& config,
                              const Eigen::Vector3d& sensor_local);
 
 /// The same through a NeighbourhoodWindow (v in the window's vertex block) with the given eigen
 /// solver: the fast path. Equal to the reference up to rounding (tests/surface).
-VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const ReconstructionConfig& config,
+VertexSample evaluate_vertex(const NeighbourhoodWindow& window, const VoxelKey& v, const SurfaceConfig& config,
                              const Eigen::Vector3d& sensor_local, EigenSolver solver);
 
 /// The conditions of one level (Eq. 1-3 per mode) on the merged statistics of H^level(v) at
 /// `position` (local frame); a defined sample with the TSDF of Eq. (4) when they hold. Shared by
 /// both evaluations above.
 VertexSample evaluate_level(const VoxelStats& stats, int level, const Eigen::Vector3d& position,
-                            const ReconstructionConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
+                            const SurfaceConfig& config, const Eigen::Vector3d& sensor_local, double min_lambda2,
                             EigenSolver solver);
 
 /// A bridge's plane must be within 45 degrees of horizontal: |n_z| >= cos 45 degrees.
@@ -77,7 +77,7 @@ inline constexpr double kBridgeMinNormalZ = 0.70710678118654752;
 /// ceil(N_min / 2) points, their points are not one line, are no thicker than the thickness
 /// guard, both means lie on the plane within it, and the plane is within 45 degrees of
 /// horizontal. Shared by both evaluations above.
-VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const ReconstructionConfig& config,
+VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, const Eigen::Vector3d& position, const SurfaceConfig& config,
                              const Eigen::Vector3d& sensor_local, double min_lambda2, EigenSolver solver);
 
 /// Whether the invariants of the covariance alone prove that evaluate_level rejects a level, so
@@ -86,7 +86,7 @@ VertexSample evaluate_bridge(const VoxelStats& near, const VoxelStats& far, cons
 ///    principal 2x2 minors), M >= l1 l2 and l1 >= T / 3, so l2 / l1 <= 9 M / T^2;
 ///  - thickness: l3 > t^2 iff C - t^2 I is positive definite (Sylvester: leading minors > 0).
 /// Both keep a relative margin of 1e-6, so rounding cannot reject a level the eigenvalues keep.
-bool rejected_by_invariants(const VoxelStats& stats, const ReconstructionConfig& config);
+bool rejected_by_invariants(const VoxelStats& stats, const SurfaceConfig& config);
 
 /// Covariances with lambda2 below this (relative to alpha^2) are treated as degenerate.
 double degenerate_lambda2(double voxel_size);

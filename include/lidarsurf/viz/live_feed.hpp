@@ -1,6 +1,6 @@
 #pragma once
 // The live mesh as a server hands it to its clients (viz/live_server.hpp): the map's blocks,
-// encoded once each in the stream format (io/live_stream.hpp), the sensor's trajectory, and per
+// encoded once each in the stream format (viz/live_stream.hpp), the sensor's trajectory, and per
 // client what it still lacks. A client that joins mid-drive gets the whole map first (nearest the
 // sensor first, in messages of about max_message_bytes), then what changed since; a client that
 // is slow to take its messages gets, when it is ready, each block's latest mesh once, however many

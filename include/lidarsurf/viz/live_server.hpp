@@ -1,6 +1,6 @@
 #pragma once
 // A live view of the map in a browser: an HTTP server (Boost.Beast) that serves one page at "/"
-// and the live mesh's stream (viz/live_feed.hpp, io/live_stream.hpp) as a WebSocket at "/live",
+// and the live mesh's stream (viz/live_feed.hpp, viz/live_stream.hpp) as a WebSocket at "/live",
 // nothing else. It runs on a thread of its own; the producer only hands over each update.
 //  - Loopback by default; another address only when the caller names it.
 //  - Every client gets the map so far, then each update; a slow client gets each block's latest

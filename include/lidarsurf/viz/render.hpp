@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "lidarsurf/io/png_writer.hpp"
+#include "lidarsurf/viz/png_writer.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 
 namespace lidarsurf::viz {

@@ -1,4 +1,4 @@
-// A map fused in tiles (map/tiles.hpp), and one map meshed square by square, against the same
+// A map fused in tiles (tiles/tiles.hpp), and one map meshed and written tile by tile, against the same
 // map fused and meshed whole (the oracle: one Reconstructor over every scan, one extraction): the
 // parts' triangles together are the whole map's, none lost and none twice, each in the tile whose
 // square holds its cube; the seams are welded; a tile that a scan cannot reach counts it without
@@ -6,13 +6,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <memory>
 
 #include "lidarsurf/core/errors.hpp"
-#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/pipeline.hpp"
-#include "town_drive.hpp"
+#include "lidarsurf/tiles/tile_writer.hpp"
+#include "lidarsurf/tiles/tiles.hpp"
+#include "test_util.hpp"
+#include "map/town_drive.hpp"
 
 using namespace lidarsurf;
 
@@ -57,25 +61,13 @@ std::unique_ptr<Reconstructor> whole_map(const std::vector<test::Scan>& drive, c
     return rec;
 }
 
-// Parts of a map welded one after the other (as a MeshStreamWriter writes them).
+// Parts of a map welded one after the other (Mesh::append with the welder's indices, as a
+// MeshStreamWriter writes them).
 struct Tiled {
     Mesh mesh;
     std::map<TileKey, Mesh> parts;
     void append(SeamWelder& welder, const TileKey& t, const Mesh& part) {
-        const std::vector<std::int64_t> existing = welder.weld(t, part, mesh.vertices.size());
-        std::vector<std::uint32_t> index(part.vertices.size());
-        for (std::size_t i = 0; i < part.vertices.size(); ++i) {
-            if (existing[i] >= 0) {
-                index[i] = static_cast<std::uint32_t>(existing[i]);
-                continue;
-            }
-            index[i] = static_cast<std::uint32_t>(mesh.vertices.size());
-            mesh.vertices.push_back(part.vertices[i]);
-            mesh.normals.push_back(part.normals[i]);
-            mesh.levels.push_back(part.levels[i]);
-            mesh.confidence.push_back(part.confidence[i]);
-        }
-        for (const auto& tri : part.triangles) mesh.triangles.push_back({index[tri[0]], index[tri[1]], index[tri[2]]});
+        mesh.append(part, welder.weld(t, part, mesh.vertices.size()));
         parts[t] = part;
     }
 };
@@ -86,11 +78,11 @@ Tiled tiled_map(const TilePlan& plan, const std::vector<test::Scan>& drive) {
     for (const TileKey& t : plan.tiles()) out.append(welder, t, fuse_tile(plan, t, [&](std::size_t i) { return drive[i].points; }));
     return out;
 }
-// One map, meshed square by square (what `fuse` writes).
-Tiled squares_of(Reconstructor& rec, const TilePlan& plan) {
+// One map, meshed tile by tile (what `fuse` writes: tile_writer.hpp).
+Tiled tiles_of(Reconstructor& rec, const TilePlan& plan) {
     Tiled out;
     SeamWelder welder(plan);
-    for (const TileKey& t : plan.tiles()) out.append(welder, t, mesh_tile(rec, plan, t));
+    mesh_in_tiles(rec, plan, [&](const TileKey& t, const Mesh& part) { out.append(welder, t, part); });
     return out;
 }
 
@@ -106,8 +98,17 @@ void expect_tiles_equal_the_whole_map(const std::vector<test::Scan>& drive, cons
         EXPECT_TRUE(test::triangles_of(mesh) == test::triangles_of(whole)) << what << ": the same triangles, none lost, none twice";
         EXPECT_EQ(mesh.vertices.size(), whole.vertices.size()) << what << ": each vertex on a seam written once";
     };
-    // The whole map meshed square by square, as fuse writes it, and the tiles fused apart.
-    expect_whole(squares_of(*rec, plan).mesh, "one map in squares");
+    // The whole map meshed tile by tile, in memory and as fuse writes it, and the tiles fused apart.
+    expect_whole(tiles_of(*rec, plan).mesh, "one map in tiles");
+    // Written: against the whole mesh written in one piece (the same float coordinates).
+    const test::TempDir dir("tiles");
+    const ReconstructionSummary written = write_in_tiles(*rec, plan, (dir / "map.ply").string(), MeshFormat::PlyBinary);
+    EXPECT_EQ(written.mesh_triangles, whole.triangles.size());
+    write_mesh(whole, dir / "whole.ply", MeshFormat::PlyBinary);
+    const Mesh file = read_mesh(dir / "map.ply"), whole_file = read_mesh(dir / "whole.ply");
+    EXPECT_EQ(file.triangles.size(), whole_file.triangles.size());
+    EXPECT_EQ(file.vertices.size(), whole_file.vertices.size()) << "each vertex on a seam written once";
+    EXPECT_TRUE(test::triangles_of(file) == test::triangles_of(whole_file)) << "one map written in tiles: the same triangles";
     const Tiled tiled = tiled_map(plan, drive);
     expect_whole(tiled.mesh, "tiles");
     std::size_t with_triangles = 0;

@@ -1,4 +1,4 @@
-#include "lidarsurf/io/live_stream.hpp"
+#include "lidarsurf/viz/live_stream.hpp"
 
 #include <algorithm>
 #include <cstring>

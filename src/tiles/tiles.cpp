@@ -1,4 +1,4 @@
-#include "lidarsurf/map/tiles.hpp"
+#include "lidarsurf/tiles/tiles.hpp"
 
 #include <algorithm>
 #include <bit>

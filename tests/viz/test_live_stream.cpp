@@ -1,4 +1,4 @@
-// The live stream's format (io/live_stream.hpp) against its documented layout, computed here by
+// The live stream's format (viz/live_stream.hpp) against its documented layout, computed here by
 // hand, and a round trip of the town drive's real blocks far from the world origin (float32
 // positions relative to the stream's origin keep 0.1 mm); malformed messages are refused.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 
 #include "../map/town_drive.hpp"
 #include "lidarsurf/core/errors.hpp"
-#include "lidarsurf/io/live_stream.hpp"
+#include "lidarsurf/viz/live_stream.hpp"
 #include "lidarsurf/pipeline.hpp"
 
 using namespace lidarsurf;

@@ -1,4 +1,4 @@
-#include "lidarsurf/io/png_writer.hpp"
+#include "lidarsurf/viz/png_writer.hpp"
 
 #include <csetjmp>
 #include <ostream>

@@ -16,7 +16,7 @@
 //    range of that box, whole. The other scans are counted (staleness is counted in scans);
 //  - every tile takes the whole map's lattice origin, so the statistics agree to the last bit.
 // A voxel beyond the crop that carving would have removed, and whose plane a ray returning in it
-// would have read, is the one thing a tile cannot see; tests/map/test_tiles.cpp compares the
+// would have read, is the one thing a tile cannot see; tests/tiles/test_tiles.cpp compares the
 // tiles with the whole map on drives crossing several tiles.
 #include <array>
 #include <compare>
@@ -31,7 +31,7 @@
 #include <Eigen/Geometry>
 
 #include "lidarsurf/mesh/mesh.hpp"
-#include "lidarsurf/surface/config.hpp"
+#include "lidarsurf/reconstruction_config.hpp"
 
 namespace lidarsurf {
 
