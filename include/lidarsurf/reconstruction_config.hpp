@@ -20,7 +20,6 @@ namespace lidarsurf {
 
 struct RunConfig {
     LIDARSURF_SETTINGS(RunConfig, LIDARSURF_RUN_SETTINGS)
-    void validate() const { check_settings(); }
 };
 
 /// Every setting of the pipeline, under the names of its components' fields (config.voxel_size,

@@ -103,8 +103,8 @@ struct Setting {
         f(s, &Self::name);                                                                           \
     }
 /// Inside a Config: the fields of TABLE, for_each_setting(f) calling f(const Setting&, member
-/// pointer) for each in order, check_settings() (each against its range) and
-/// literal_settings() (those the paper as written sets, to its value).
+/// pointer) for each in order, validate() (each against its range: InvalidArgument naming the
+/// first bad field) and literal_settings() (those the paper as written sets, to its value).
 #define LIDARSURF_SETTINGS(Config, TABLE)                                             \
     TABLE(LIDARSURF_SETTING_FIELD)                                                    \
     template <typename F>                                                             \
@@ -112,7 +112,7 @@ struct Setting {
         using Self = Config;                                                          \
         TABLE(LIDARSURF_SETTING_VISIT)                                                \
     }                                                                                 \
-    void check_settings() const {                                                     \
+    void validate() const {                                                           \
         for_each_setting([this](const ::lidarsurf::Setting& s, auto member) { s.check(this->*member); }); \
     }                                                                                 \
     void literal_settings() {                                                         \

@@ -49,8 +49,6 @@ namespace lidarsurf {
 
 struct CarvingConfig {
     LIDARSURF_SETTINGS(CarvingConfig, LIDARSURF_CARVING_SETTINGS)
-    /// Throws InvalidArgument naming the first bad field.
-    void validate() const { check_settings(); }
 };
 
 struct CarvingStats {

@@ -41,8 +41,6 @@ namespace lidarsurf {
 
 struct LiveMeshConfig {
     LIDARSURF_SETTINGS(LiveMeshConfig, LIDARSURF_LIVE_MESH_SETTINGS)
-    /// Throws InvalidArgument naming the first bad field.
-    void validate() const { check_settings(); }
 };
 
 /// One block of the live mesh: the grid block `key` (cubes 8 key to 8 key + 7) and the triangles

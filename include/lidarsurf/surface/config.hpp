@@ -90,9 +90,6 @@ struct SurfaceConfig {
     /// The bridge boxes' reach beyond k_max: bridge_reach, capped so that k_max + it <= kMaxReach.
     int bridge_extent() const;
     bool gaussian() const { return mode == Mode::AdaptiveGaussian || mode == Mode::ConstantGaussian; }
-
-    /// Throws InvalidArgument naming the first bad field.
-    void validate() const { check_settings(); }
 };
 
 }  // namespace lidarsurf
