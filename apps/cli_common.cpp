@@ -116,6 +116,22 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
 }
 
 
+void add_recording_options(CLI::App* app, RecordingFlags& o) {
+    app->add_option("--topic", o.topic, "A bag's topic of the scans (default: its only PointCloud2 topic, else its Ouster lidar packets)");
+    app->add_option("--metadata", o.metadata, "An Ouster sensor's metadata JSON (default: beside the pcap as X.json, or the bag's metadata topic)");
+    app->add_option("--returns", o.returns, "Ouster dual-return profiles: first | both")->capture_default_str();
+}
+
+RecordingOptions recording_options(const RecordingFlags& o) {
+    RecordingOptions r;
+    r.topic = o.topic;
+    r.metadata = o.metadata;
+    if (o.returns == "first") r.returns = OusterReturns::First;
+    else if (o.returns == "both") r.returns = OusterReturns::Both;
+    else throw InvalidArgument("--returns must be first or both, not '" + o.returns + "'");
+    return r;
+}
+
 Method resolve_method(const ReconstructOptions& o) {
     Method m;
     m.config = o.config;

@@ -11,6 +11,7 @@
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/io/recording.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/pipeline.hpp"
 
@@ -44,6 +45,13 @@ struct ReconstructOptions {
     bool literal = false;  // ReconstructionConfig::make_paper_literal()
 };
 void add_reconstruct_options(CLI::App* app, ReconstructOptions& o);
+
+/// How a recording is read (`reconstruct`, `info`): --topic, --metadata, --returns.
+struct RecordingFlags {
+    std::string topic, metadata, returns = "first";
+};
+void add_recording_options(CLI::App* app, RecordingFlags& o);
+RecordingOptions recording_options(const RecordingFlags& o);
 
 /// The method and its settings, validated before any file is read.
 struct Method : MethodConfig {

@@ -2,6 +2,7 @@
 // The subcommands, one *_command.cpp each: each adds itself to the app and runs from its options.
 // Errors are thrown as lidarsurf exceptions; main() maps them to exit codes.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "cli_common.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/io/recorded_drive.hpp"
 #include "lidarsurf/tiles/tiles.hpp"
 #include "lidarsurf/eval/map_metrics.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -20,9 +22,19 @@ namespace lidarsurf::cli {
 struct ReconstructCommandOptions {
     std::string input, output, mesh_format = "auto";
     ReconstructOptions reconstruct;
+    RecordingFlags recording;
+    int scan = 0;  // the scan of a recording
 };
 CLI::App* add_reconstruct_command(CLI::App& app, ReconstructCommandOptions& o);
 int run_reconstruct(const ReconstructCommandOptions& o);
+
+struct InfoOptions {
+    std::string input;
+    RecordingFlags recording;
+    std::string json;
+};
+CLI::App* add_info_command(CLI::App& app, InfoOptions& o);
+int run_info(const InfoOptions& o);
 
 struct EvaluateOptions {
     std::vector<std::string> inputs;
@@ -96,6 +108,9 @@ struct FuseOptions {
     double rate = 0;           // scans a second (0: as fast as it goes)
     TileConfig tiles{0.0};     // tile_size 0: the map whole, in memory
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
+    RecordingFlags recording;        // a recording's topic, metadata and returns
+    std::string times;               // KITTI poses' times.txt, for a recording
+    int deskew = 1;                  // de-skew a recording's scans when they have per-point times
 };
 CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o);
 int run_fuse(const FuseOptions& o);
@@ -106,6 +121,7 @@ struct FuseInput {
         KittiSequence seq;
         SequencePoses where;
         std::vector<Eigen::Isometry3d> poses;
+        std::shared_ptr<RecordedDrive> recording;  // a recording's drive: scans read from it, in order
     };
     struct Scan {
         std::size_t drive = 0, frame = 0;
@@ -117,7 +133,8 @@ struct FuseInput {
     const Eigen::Isometry3d& pose(std::size_t n) const { return drives[scans[n].drive].poses[scans[n].frame]; }
     /// Scan n in the world frame.
     PointCloud read(std::size_t n, const PointReadOptions& options) const {
-        return read_world_scan(drives[scans[n].drive].seq, scans[n].frame, pose(n), options);
+        const Drive& d = drives[scans[n].drive];
+        return d.recording ? d.recording->world_scan(scans[n].frame) : read_world_scan(d.seq, scans[n].frame, pose(n), options);
     }
     /// "000042", or "2:000042" (drive 2) with several drives.
     std::string label(std::size_t n) const;

@@ -35,7 +35,8 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     CLI::App* f = app.add_subcommand("fuse", "Fuse a sequence of scans with poses (KITTI odometry layout) into one mesh");
     f->add_option("dirs", o.dirs,
                   "Sequence directory: velodyne/000000.bin, ... with poses.txt (sensor-to-world lidar poses, as simulate "
-                  "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt). "
+                  "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt), "
+                  "or a recording (.pcap, ROS 1 .bag) with --poses, its sensor's timestamped trajectory. "
                   "Several: drives whose poses share one world frame, fused one after the other into one map")
         ->required();
     f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();
@@ -43,6 +44,10 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("--poses", o.poses,
                   "Pose file (KITTI format, one 3x4 sensor-to-world pose a line), e.g. from your odometry; the lidar's "
                   "unless --calib is given");
+    add_recording_options(f, o.recording);
+    f->add_option("--times", o.times, "A recording's trajectory given as KITTI poses (--poses): their times.txt (seconds, one a line)");
+    f->add_option("--deskew", o.deskew, "De-skew a recording's scans with the trajectory, when they have per-point times (0: off)")
+        ->capture_default_str();
     f->add_option("--first", o.first, "First frame (of each drive)")->capture_default_str();
     f->add_option("--frames", o.frames, "Frames to fuse of each drive (0 = to the last)")->capture_default_str();
     f->add_option("--step", o.step, "Use every step-th frame")->capture_default_str();
@@ -91,7 +96,8 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
               "  lidarsurf fuse drive --poses drive_poses.txt -o drive.ply\n"
               "  lidarsurf fuse monday tuesday -o street.ply          (two drives of one street, one world frame)\n"
               "  lidarsurf fuse kitti00 -o kitti00.ply --tile-size 100                (flat memory on a drive of any length)\n"
-              "  lidarsurf fuse town -o town.ply --serve 8080 --rate 10          (then open http://127.0.0.1:8080/)");
+              "  lidarsurf fuse town -o town.ply --serve 8080 --rate 10          (then open http://127.0.0.1:8080/)\n"
+              "  lidarsurf fuse drive.pcap --poses drive_tum.txt -o drive.ply     (a recording with the sensor's trajectory)");
     return f;
 }
 
@@ -112,13 +118,44 @@ std::string FuseInput::layout() const {
     return out;
 }
 
+namespace {
+
+// A recording's drive: its scans within the trajectory of --poses (TUM, or KITTI with --times).
+FuseInput::Drive read_recorded_drive(const FuseOptions& o, const std::string& path, FileRoles& files) {
+    if (o.poses.empty())
+        throw InvalidArgument(path + ": a recording needs the sensor's trajectory to be fused: --poses FILE (TUM: t x y z qx qy qz qw, "
+                              "as odometries such as KISS-ICP write; or KITTI poses with --times times.txt)");
+    if (!o.calib.empty()) throw InvalidArgument("--calib converts KITTI's camera poses of a sequence directory, not a recording's trajectory");
+    RecordedDriveOptions ro;
+    ro.recording = recording_options(o.recording);
+    ro.deskew = o.deskew != 0;
+    auto drive = std::make_shared<RecordedDrive>(path, read_trajectory(o.poses, o.times), ro);
+    files.input(path);
+    files.input(o.poses);
+    if (!o.times.empty()) files.input(o.times);
+    FuseInput::Drive d{KittiSequence{path}, {}, {}, drive};
+    d.where.poses = o.poses;
+    d.where.layout = "--poses (" + std::to_string(drive->size()) + " of " + std::to_string(drive->recorded()) + " scans within its span" +
+                     (drive->deskews() ? ", de-skewed" : "") + ")";
+    for (std::size_t k = 0; k < drive->size(); ++k) d.poses.push_back(drive->pose(k));
+    return d;
+}
+
+}  // namespace
+
 FuseInput read_fuse_input(const FuseOptions& o) {
     if (o.dirs.size() > 1 && !o.poses.empty())
         throw InvalidArgument("--poses names the poses of one drive: with several drives, put each one's in its poses.txt");
     FuseInput in;
     FileRoles files;
     for (const std::string& dir : o.dirs) {
-        FuseInput::Drive d{KittiSequence{dir}, {}, {}};
+        if (is_recording(dir)) {
+            in.drives.push_back(read_recorded_drive(o, dir, files));
+            const std::size_t available = in.drives.back().poses.size();
+            for (std::size_t i : select_frames(available, o.first, o.frames, o.step, dir)) in.scans.push_back({in.drives.size() - 1, i});
+            continue;
+        }
+        FuseInput::Drive d{KittiSequence{dir}, {}, {}, {}};
         const std::size_t available = d.seq.frame_count();  // IoError when there is no velodyne/
         d.where = find_sequence_poses(d.seq.dir, o.poses, o.calib);
         d.poses = read_sequence_poses(d.where);
@@ -368,8 +405,10 @@ private:
 }  // namespace
 
 int run_fuse(const FuseOptions& o) {
-    const FuseChecked checked = check_fuse_options(o);
+    FuseChecked checked = check_fuse_options(o);
     FuseInput in = read_fuse_input(o);
+    // A recording says where its rays start (an Ouster's lidar origin), unless --origin does.
+    if (in.drives.front().recording && o.reconstruct.origin == ReconstructOptions{}.origin) checked.method.sensor = in.drives.front().recording->origin();
     in.format = mesh_format_for(o.output, checked.requested);  // .stl: exit 2 now
     if (o.tiles.tile_size != 0) return run_fuse_tiles(o, checked.method, in);
 

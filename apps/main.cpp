@@ -72,6 +72,8 @@ int main(int argc, char** argv) {
     auto* vw = add_view_command(app, vo);
     MapBenchmarkOptions mo;
     auto* mb = add_map_benchmark_command(app, mo);
+    InfoOptions io;
+    auto* in = add_info_command(app, io);
 
     try {
         app.parse(argc, argv);
@@ -92,6 +94,7 @@ int main(int argc, char** argv) {
         if (*fu) return run_fuse(fo);
         if (*vw) return run_view(vo);
         if (*mb) return run_map_benchmark(mo);
+        if (*in) return run_info(io);
     } catch (const Error& e) {
         return fail("error", e.what(), exit_code(e));
     } catch (const std::bad_alloc&) {

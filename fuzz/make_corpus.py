@@ -98,4 +98,69 @@ tri = (struct.pack("<3i", 5, 6, -7) + struct.pack("<II", 3, 1) + struct.pack("<9
 put("fuzz_live_stream", "one_block", live(1, [tri]))
 put("fuzz_live_stream", "two_blocks_final", live(2, [tri, tri]))
 put("fuzz_live_stream", "header_only", live(4, []))
+# Ouster pcaps (fuzz_ouster_pcap.cpp: 8 beams, 64 columns a frame, 16 a packet; the first byte
+# picks the profile). One frame's packets over Ethernet/IPv4/UDP to port 7502, the larger ones
+# in 1480-byte IPv4 fragments.
+OUSTER = [("LEGACY", 12), ("RNG19_RFL8_SIG16_NIR16", 12), ("RNG19_RFL8_SIG16_NIR16_DUAL", 16), ("RNG15_RFL8_NIR8", 4),
+          ("FUSA_RNG15_RFL8_NIR8_DUAL", 8)]
+
+
+def ouster_packet(profile, px, frame, first):
+    legacy = profile == "LEGACY"
+    col = 16 + 8 * px + 4 if legacy else 12 + 8 * px
+    b = bytearray((0 if legacy else 64) + 16 * col)
+    if not legacy:
+        struct.pack_into("<HH", b, 0, 1, frame)
+    for c in range(16):
+        at = (0 if legacy else 32) + c * col
+        struct.pack_into("<QH", b, at, 10**9 + 50000 * (first + c), first + c)
+        if legacy:
+            struct.pack_into("<H", b, at + 10, frame)
+            struct.pack_into("<I", b, at + col - 4, 0xFFFFFFFF)
+        else:
+            struct.pack_into("<H", b, at + 10, 1)
+        for beam in range(8):
+            struct.pack_into("<I", b, at + (16 if legacy else 12) + beam * px, (3000 + 40 * c + beam) if (c + beam) % 5 else 0)
+    return bytes(b)
+
+
+def pcap_of(datagrams):
+    out = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)
+    for n, payload in enumerate(datagrams):
+        udp = struct.pack(">HHHH", 7245, 7502, 8 + len(payload), 0) + payload
+        for off in range(0, len(udp), 1480):
+            part = udp[off:off + 1480]
+            more = 0x2000 if off + len(part) < len(udp) else 0
+            ip = struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(part), 100 + n, more | off // 8, 64, 17, 0, bytes([192, 168, 1, 10]),
+                             bytes([192, 168, 1, 1])) + part
+            frame = b"\xff" * 6 + b"\x02" * 6 + b"\x08\x00" + ip
+            out += struct.pack("<IIII", 1700000000, 10 * n, len(frame), len(frame)) + frame
+    return out
+
+
+for i, (profile, px) in enumerate(OUSTER):
+    packets = [ouster_packet(profile, px, 7, first) for first in range(0, 64, 16)] + [ouster_packet(profile, px, 8, 0)]
+    put("fuzz_ouster_pcap", profile.lower() + ".pcap", bytes([i]) + pcap_of(packets))
+
+# sensor_msgs/PointCloud2, ROS 1 serialization: float32 with a uint32 time and padding; float64
+# big endian; an organized 2 x 3 cloud with a NaN.
+
+
+def ros_string(s):
+    return struct.pack("<I", len(s)) + s.encode()
+
+
+def cloud2(fields, step, rows, cols, data, big=False):
+    out = struct.pack("<III", 1, 100, 5) + ros_string("lidar") + struct.pack("<II", rows, cols) + struct.pack("<I", len(fields))
+    for name, off, ty in fields:
+        out += ros_string(name) + struct.pack("<IBI", off, ty, 1)
+    return out + struct.pack("<BII", big, step, step * cols) + struct.pack("<I", len(data)) + data + b"\x00"
+
+
+put("fuzz_point_cloud2", "float32_t.msg", cloud2([("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("t", 16, 6)], 24, 1, len(PTS),
+                                                 b"".join(struct.pack("<fff4xI4x", *p, 1000 * i) for i, p in enumerate(PTS))))
+put("fuzz_point_cloud2", "float64_big.msg", cloud2([("x", 0, 8), ("y", 8, 8), ("z", 16, 8), ("time", 24, 7)], 28, 1, len(PTS),
+                                                   b"".join(struct.pack(">dddf", *p, 0.01 * i) for i, p in enumerate(PTS)), big=True))
+put("fuzz_point_cloud2", "organized.msg", cloud2([("x", 0, 7), ("y", 4, 7), ("z", 8, 7)], 12, 2, 3,
+                                                 b"".join(struct.pack("<fff", *p) for p in PTS[:5]) + struct.pack("<fff", *[float("nan")] * 3)))
 print("corpus written to", root, file=sys.stderr)

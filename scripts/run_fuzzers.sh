@@ -10,7 +10,8 @@ dir=$1 seconds=$2; shift 2
 src=$(cd "$(dirname "$0")/.." && pwd)
 names=("$@")
 [ ${#names[@]} -gt 0 ] || names=(fuzz_kitti_bin fuzz_ply_points fuzz_pcd_points fuzz_text_points fuzz_poses
-                                 fuzz_mesh_reader fuzz_sensor_json fuzz_reconstruct fuzz_live_stream)
+                                 fuzz_mesh_reader fuzz_sensor_json fuzz_reconstruct fuzz_live_stream
+                                 fuzz_ouster_pcap fuzz_point_cloud2)
 mkdir -p "$dir/artifacts" "$dir/logs"
 status=0
 printf '%-18s %8s %12s %10s %8s  %s\n' harness seconds executions exec/s corpus result

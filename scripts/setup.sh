@@ -20,6 +20,9 @@ PKGS=(
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
   python3-distributed  # Dask: a map fused in tiles on many workers (lidarsurf.fuse_tiles)
+  libpcap-dev          # recordings: packet captures (Ouster pcaps)
+  librosbag-storage-dev  # recordings: ROS 1's own bag reader (optional: the build reads no bags without it)
+  python3-rosbag python3-sensor-msgs  # tests: ROS 1 bags written by ROS's own writer
 )
 # npm fetches three.js for the viewer (below); a machine with Node.js from elsewhere has npm already,
 # and Debian's npm package would conflict with it.

@@ -36,6 +36,7 @@ void bind_config(py::module_& m);  // config.cpp
 namespace python {
 void bind_mesh(py::module_& m);           // mesh.cpp
 void bind_reconstructor(py::module_& m);  // reconstructor.cpp
+void bind_recording(py::module_& m);      // recording.cpp
 }  // namespace python
 }  // namespace lidarsurf
 
@@ -120,6 +121,7 @@ PYBIND11_MODULE(_lidarsurf, m) {
 
     python::bind_mesh(m);
     python::bind_reconstructor(m);
+    python::bind_recording(m);
 
     m.def("points_view", [](const py::handle& points) { return points_view(points, "points"); }, py::arg("points"),
           "The (N, 3) float64 C-contiguous array reconstruct() reads: the input itself when it already is one (no copy).");

@@ -486,3 +486,35 @@ def test_every_simd_level_gives_the_same_mesh(scan):
         assert np.array_equal(m.normals, meshes[0].normals) and np.array_equal(m.confidence, meshes[0].confidence)
     with pytest.raises(ValueError, match="unknown SIMD level"):
         lidarsurf.set_simd_level("avx1024")
+
+
+# ---- Recordings (the real Ouster recordings of ../shared/data; skipped when absent). ----
+_OUSTER = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data", "ouster")
+
+
+@pytest.mark.skipif(not os.path.isdir(_OUSTER), reason="../shared/data/ouster is absent")
+def test_read_recording_gives_the_scans_with_times_and_poses_from_a_trajectory(tmp_path):
+    pcap = os.path.join(_OUSTER, "OS-2-128-U1_v2.3.0_1024x10.pcap")
+    scans = list(lidarsurf.read_recording(pcap))
+    assert len(scans) == 1
+    stamp, points, times, pose = scans[0]
+    assert points.shape[1] == 3 and points.shape[0] > 100000 and np.isfinite(points).all()
+    assert times.shape == (points.shape[0],) and 0 <= times.min() and times.max() <= 0.1
+    assert pose is None
+    # A trajectory that turns the sensor by pi/4 about z and lifts it 4 m over two seconds: at the
+    # stamp, halfway, the pose is pi/8 and 2 m; the points stay in the sensor frame.
+    s = stamp / 1e9
+    q = (0, 0, np.sin(np.pi / 8), np.cos(np.pi / 8))  # qx qy qz qw of a pi/4 turn about z
+    traj = tmp_path / "traj.txt"
+    traj.write_text("%.9f 0 0 0 0 0 0 1\n%.9f 0 0 4 %g %g %g %g\n" % (s - 1, s + 1, *q))
+    (stamp2, points2, times2, pose2) = next(iter(lidarsurf.read_recording(pcap, poses=str(traj), deskew=False)))
+    assert stamp2 == stamp
+    np.testing.assert_array_equal(points2, points)
+    assert pose2.shape == (4, 4)
+    np.testing.assert_allclose(pose2[:3, 3], [0, 0, 2], atol=1e-6)
+    yaw = np.arctan2(pose2[1, 0], pose2[0, 0])
+    np.testing.assert_allclose(yaw, np.pi / 8, atol=1e-6)  # half of the pi/4 turn between the lines
+    with pytest.raises(ValueError, match="returns"):
+        lidarsurf.read_recording(pcap, returns="third")
+    with pytest.raises(ValueError):
+        list(lidarsurf.read_recording(pcap, metadata=os.path.join(_OUSTER, "OS-0-32-U1_v2.2.0_1024x10.json")))

@@ -1,0 +1,70 @@
+#pragma once
+// Recordings of a robot's drive as scans: an Ouster pcap (with the sensor's metadata JSON) and a
+// ROS 1 bag of sensor_msgs/PointCloud2 or of the Ouster driver's raw packets. Scans are read one
+// at a time (memory does not grow with the recording's length), in the recording's order.
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lidarsurf/io/ouster.hpp"
+#include "lidarsurf/io/recorded_scan.hpp"
+
+namespace lidarsurf {
+
+struct RecordingOptions {
+    /// The topic the scans are on (bags). Empty: the bag's only PointCloud2 topic, else its Ouster
+    /// lidar packets.
+    std::string topic;
+    /// The Ouster metadata JSON. Empty: beside the pcap under its base name (X.pcap -> X.json),
+    /// or the bag's Ouster metadata topic.
+    std::filesystem::path metadata;
+    OusterReturns returns = OusterReturns::First;
+};
+
+class ScanSource {
+public:
+    virtual ~ScanSource() = default;
+    /// The next scan; false at the end. Throws FormatError naming the file and the message or
+    /// packet where the recording is malformed.
+    virtual bool next(RecordedScan& scan) = 0;
+    /// What the scans come from, for reports: "Ouster OS-1-64, LEGACY, 64 x 1024, pcap".
+    virtual std::string description() const = 0;
+};
+
+/// True for the names of the recordings lidarsurf reads (.pcap, .pcapng, .bag) and of those it
+/// knows but does not read yet (.mcap, .db3, a ROS 2 bag directory), which open_recording
+/// refuses with an explanation.
+bool is_recording(const std::filesystem::path& path);
+
+/// Opens a recording. Throws IoError (missing, unreadable), FormatError (malformed),
+/// InvalidArgument (a topic that is not there, several candidate topics, no metadata) and
+/// InvalidInput (a kind of recording this build does not read).
+std::unique_ptr<ScanSource> open_recording(const std::filesystem::path& path, const RecordingOptions& options = {});
+
+/// The scan numbered `index` (from 0) of a recording. Throws InvalidArgument when it has fewer.
+RecordedScan read_recorded_scan(const std::filesystem::path& path, std::size_t index, const RecordingOptions& options = {});
+
+struct TopicSummary {
+    std::string name;   ///< topic, or "udp:PORT" in a pcap
+    std::string type;   ///< message type, or what the port carries
+    std::size_t messages = 0;
+    std::int64_t first_ns = 0, last_ns = 0;
+};
+
+struct RecordingSummary {
+    std::string container;              ///< "pcap", "ROS 1 bag"
+    std::vector<TopicSummary> topics;
+    std::string source;                 ///< ScanSource::description() of what scans are read from
+    std::size_t scans = 0;
+    std::size_t points = 0;
+    std::size_t partial_scans = 0;      ///< scans with less than a whole revolution
+    std::int64_t first_ns = 0, last_ns = 0;  ///< the scans' stamps
+    bool per_point_times = false;
+};
+
+/// What `lidarsurf info` prints: the recording's topics and the scans it gives.
+RecordingSummary summarize_recording(const std::filesystem::path& path, const RecordingOptions& options = {});
+
+}  // namespace lidarsurf

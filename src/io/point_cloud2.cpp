@@ -1,0 +1,152 @@
+// sensor_msgs/PointCloud2 (see point_cloud2.hpp).
+#include "lidarsurf/io/point_cloud2.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "byte_reader.hpp"
+#include "lidarsurf/core/errors.hpp"
+
+namespace lidarsurf {
+namespace {
+
+// Reads ROS 1 serialization (little endian) with every length checked against the buffer.
+class Ros1Reader {
+public:
+    Ros1Reader(std::span<const std::uint8_t> bytes, const std::string& where) : bytes_(bytes), where_(where) {}
+    template <typename T>
+    T scalar() {
+        need(sizeof(T));
+        T v;
+        std::memcpy(&v, bytes_.data() + at_, sizeof v);
+        at_ += sizeof(T);
+        return v;
+    }
+    std::string string() {
+        const std::uint32_t n = scalar<std::uint32_t>();
+        need(n);
+        std::string s(reinterpret_cast<const char*>(bytes_.data() + at_), n);
+        at_ += n;
+        return s;
+    }
+    std::span<const std::uint8_t> bytes(std::size_t n) {
+        need(n);
+        auto s = bytes_.subspan(at_, n);
+        at_ += n;
+        return s;
+    }
+
+private:
+    void need(std::size_t n) const {
+        if (n > bytes_.size() - at_)
+            throw FormatError(where_ + ": PointCloud2 truncated: " + std::to_string(n) + " bytes needed at byte " + std::to_string(at_) +
+                              " of " + std::to_string(bytes_.size()));
+    }
+    std::span<const std::uint8_t> bytes_;
+    const std::string& where_;
+    std::size_t at_ = 0;
+};
+
+detail::ScalarType scalar_type(std::uint8_t datatype) {
+    using detail::ScalarType;
+    constexpr ScalarType types[] = {ScalarType::Int8,  ScalarType::UInt8,  ScalarType::Int16,   ScalarType::UInt16,
+                                    ScalarType::Int32, ScalarType::UInt32, ScalarType::Float32, ScalarType::Float64};
+    return types[datatype - 1];
+}
+
+const PointField2* field_named(const PointCloud2Message& m, std::initializer_list<const char*> names) {
+    for (const char* n : names)
+        for (const auto& f : m.fields)
+            if (f.name == n) return &f;
+    return nullptr;
+}
+
+}  // namespace
+
+PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where) {
+    Ros1Reader r(bytes, where);
+    PointCloud2Message m;
+    r.scalar<std::uint32_t>();  // header.seq
+    const auto sec = r.scalar<std::uint32_t>();
+    const auto nsec = r.scalar<std::uint32_t>();
+    m.stamp_ns = static_cast<std::int64_t>(sec) * 1000000000 + nsec;
+    m.frame_id = r.string();
+    m.height = r.scalar<std::uint32_t>();
+    m.width = r.scalar<std::uint32_t>();
+    const auto n_fields = r.scalar<std::uint32_t>();
+    if (n_fields > 1024) throw FormatError(where + ": PointCloud2 with " + std::to_string(n_fields) + " fields");
+    for (std::uint32_t i = 0; i < n_fields; ++i) {
+        PointField2 f;
+        f.name = r.string();
+        f.offset = r.scalar<std::uint32_t>();
+        f.datatype = r.scalar<std::uint8_t>();
+        f.count = r.scalar<std::uint32_t>();
+        m.fields.push_back(std::move(f));
+    }
+    m.big_endian = r.scalar<std::uint8_t>() != 0;
+    m.point_step = r.scalar<std::uint32_t>();
+    m.row_step = r.scalar<std::uint32_t>();
+    m.data = r.bytes(r.scalar<std::uint32_t>());
+    r.scalar<std::uint8_t>();  // is_dense: not trusted, every point is checked
+    return m;
+}
+
+RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string& where, std::size_t* no_returns) {
+    const auto fail = [&](const std::string& what) { return FormatError(where + ": PointCloud2 " + what); };
+    const std::uint64_t row_bytes = std::uint64_t{m.width} * m.point_step;
+    if (m.point_step == 0 && m.width * std::uint64_t{m.height} > 0) throw fail("with point_step 0");
+    if (m.row_step < row_bytes) throw fail("row_step " + std::to_string(m.row_step) + " is less than width x point_step = " + std::to_string(row_bytes));
+    if (std::uint64_t{m.row_step} * m.height != m.data.size())
+        throw fail("of " + std::to_string(m.height) + " rows of row_step " + std::to_string(m.row_step) + " bytes holds " +
+                   std::to_string(m.data.size()) + " bytes of data");
+    for (const auto& f : m.fields) {
+        if (f.datatype < 1 || f.datatype > 8) throw fail("field '" + f.name + "' has datatype " + std::to_string(f.datatype));
+        const std::uint64_t end = f.offset + std::uint64_t{f.count == 0 ? 1 : f.count} * detail::scalar_size(scalar_type(f.datatype));
+        if (end > m.point_step) throw fail("field '" + f.name + "' ends at byte " + std::to_string(end) + " of a point_step of " + std::to_string(m.point_step));
+    }
+    const PointField2* xyz[3] = {field_named(m, {"x"}), field_named(m, {"y"}), field_named(m, {"z"})};
+    for (const auto* f : xyz)
+        if (!f || (f->datatype != 7 && f->datatype != 8)) throw fail("without float32 or float64 fields x, y and z");
+    // Per-point time: its field and how to turn a value into seconds after the stamp.
+    const PointField2* time = field_named(m, {"t", "offset_time", "time", "timestamp", "time_stamp"});
+    double time_scale = 1;
+    bool absolute = false;
+    if (time) {
+        const bool integer = time->datatype <= 6;
+        if (integer) time_scale = 1e-9;  // Ouster t, Livox offset_time: ns after the stamp
+        if (!integer && (time->name == "timestamp" || time->name == "time_stamp")) absolute = true;  // Hesai: absolute s
+    }
+    RecordedScan scan;
+    scan.stamp_ns = m.stamp_ns;
+    scan.frame_id = m.frame_id;
+    if (no_returns) *no_returns = 0;
+    const std::size_t n = std::size_t{m.width} * m.height;
+    if (n == 0) return scan;  // (and no walk over 2^32 empty rows)
+    scan.cloud.points.reserve(n);
+    if (time) scan.times.reserve(n);
+    std::size_t empty = 0;
+    const double stamp_s = 1e-9 * static_cast<double>(m.stamp_ns);
+    for (std::uint32_t row = 0; row < m.height; ++row) {
+        const auto* base = reinterpret_cast<const char*>(m.data.data()) + std::size_t{row} * m.row_step;
+        for (std::uint32_t col = 0; col < m.width; ++col) {
+            const char* p = base + std::size_t{col} * m.point_step;
+            Eigen::Vector3d v;
+            for (int a = 0; a < 3; ++a) v[a] = detail::load_scalar(p + xyz[a]->offset, scalar_type(xyz[a]->datatype), m.big_endian);
+            if (!v.allFinite() || v.isZero()) {  // organized clouds mark a ray without return so
+                ++empty;
+                continue;
+            }
+            scan.cloud.points.push_back(v);
+            if (time) {
+                double t = detail::load_scalar(p + time->offset, scalar_type(time->datatype), m.big_endian) * time_scale;
+                if (absolute) t -= stamp_s;
+                if (!std::isfinite(t)) throw fail("point " + std::to_string(std::size_t{row} * m.width + col) + " has a time that is not finite");
+                scan.times.push_back(static_cast<float>(t));
+            }
+        }
+    }
+    if (no_returns) *no_returns = empty;
+    return scan;
+}
+
+}  // namespace lidarsurf
