@@ -163,6 +163,8 @@ struct ViewOptions {
     std::string input, output, points, colour = "height", title;
     int max_points = 200000;
     double tau = 0.2;  ///< the mesh's tau: the confidence colouring marks the vertices below it (inferred surface)
+    int points_scan = 0;       ///< --points of a recording: its scan
+    RecordingFlags recording;  ///< --points of a recording: how it is read
 };
 CLI::App* add_view_command(CLI::App& app, ViewOptions& o);
 int run_view(const ViewOptions& o);

@@ -16,6 +16,7 @@
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/surface/config.hpp"
 #include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/io/recording.hpp"
 #include "viewer_page.hpp"
 
 namespace fs = std::filesystem;
@@ -58,8 +59,10 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
         "the input points. The URL's hash sets them too: mesh.html#colour=level&wireframe=1&points=1.\n");
     v->add_option("input", o.input, "Mesh (.ply, .obj)")->required();
     v->add_option("-o,--output", o.output, "Output page (.html; default: the mesh's name with .html)");
-    v->add_option("--points", o.points, "Also show these points (any format reconstruct reads; the mesh's frame)");
+    v->add_option("--points", o.points, "Also show these points (any format or recording reconstruct reads; the mesh's frame)");
     v->add_option("--max-points", o.max_points, "Show at most this many of them (every n-th)")->capture_default_str();
+    v->add_option("--scan,--message", o.points_scan, "With --points REC (a recording): its scan to show, from 0")->capture_default_str()->check(CLI::NonNegativeNumber);
+    add_recording_options(v, o.recording);
     v->add_option("--colour,--color", o.colour, "Colouring when the page opens: height | level | confidence | normal | grey")->capture_default_str();
     v->add_option("--title", o.title, "Title of the page (default: the mesh's file name)");
     o.tau = ReconstructionConfig{}.tau;
@@ -102,7 +105,8 @@ int run_view(const ViewOptions& o) {
     std::vector<float> cloud;
     std::size_t shown = 0;
     if (!o.points.empty()) {
-        PointCloud pts = read_points(o.points);
+        PointCloud pts = is_recording(o.points) ? read_recorded_scan(o.points, static_cast<std::size_t>(o.points_scan), recording_options(o.recording)).cloud
+                                                : read_points(o.points);
         drop_non_finite(pts);
         const std::size_t step = std::max<std::size_t>(1, (pts.points.size() + static_cast<std::size_t>(o.max_points) - 1) /
                                                               static_cast<std::size_t>(o.max_points));

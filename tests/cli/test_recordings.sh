@@ -48,6 +48,7 @@ expect 0 "1 scans .*per-point times: yes" -- "$cli" info "$pcap" --json "$dir/in
 check "info --json lists the scans" -- grep -q '"scans": 1' "$dir/info.json"
 expect 0 "scan 0: .* triangles" -- "$cli" reconstruct "$pcap" -o "$out"
 check "a mesh from the pcap" -- test -s "$out"
+expect 0 "view: .* triangles, 119682 points" -- "$cli" view "$out" -o "$dir/view.html" --points "$pcap" --max-points 1000000
 expect 2 "scan 5 asked for, but the recording holds 1" -- "$cli" reconstruct "$pcap" --scan 5 -o "$dir/five.ply"
 check "nothing written for a scan that is not there" -- test ! -e "$dir/five.ply"
 # Metadata of another sensor: the packets' size disagrees, exit 3 naming the packet.
