@@ -259,12 +259,12 @@ bool OusterSweeps::add(std::span<const std::uint8_t> packet, const std::string& 
         if (seen_[id]) continue;  // a repeated column (a packet sent twice)
         seen_[id] = 1;
         ++columns_seen_;
-        convert_column(col + (legacy ? kLegacyColumnHeader : kColumnHeader), id, static_cast<std::int64_t>(stamp));
+        convert_column(col + (legacy ? kLegacyColumnHeader : kColumnHeader), id, stamp);
     }
     return closed;
 }
 
-void OusterSweeps::convert_column(const std::uint8_t* pixels, int id, std::int64_t stamp_ns) {
+void OusterSweeps::convert_column(const std::uint8_t* pixels, int id, std::uint64_t stamp_ns) {
     const auto& l = layout_of(meta_.profile);
     const int h = meta_.pixels_per_column;
     const int returns = returns_ == OusterReturns::Both ? meta_.returns() : 1;
@@ -293,8 +293,8 @@ void OusterSweeps::convert_column(const std::uint8_t* pixels, int id, std::int64
 
 void OusterSweeps::close_sweep() {
     if (columns_seen_ == 0) return;
-    std::int64_t first = column_stamp_.empty() ? 0 : *std::min_element(column_stamp_.begin(), column_stamp_.end());
-    sweep_.stamp_ns = first;
+    const std::uint64_t first = column_stamp_.empty() ? 0 : *std::min_element(column_stamp_.begin(), column_stamp_.end());
+    sweep_.stamp_ns = static_cast<std::int64_t>(first);  // ns since the sensor's epoch (2^63 ns is 292 years)
     sweep_.times.resize(column_stamp_.size());
     for (std::size_t i = 0; i < column_stamp_.size(); ++i) sweep_.times[i] = static_cast<float>(1e-9 * static_cast<double>(column_stamp_[i] - first));
     sweep_.frame_id = "os_sensor";

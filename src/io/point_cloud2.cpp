@@ -10,6 +10,8 @@
 namespace lidarsurf {
 namespace {
 
+constexpr double kMaxPointTime = 3600;  // s from the stamp: a sweep lasts well under a second
+
 // Reads ROS 1 serialization (little endian) with every length checked against the buffer.
 class Ros1Reader {
 public:
@@ -140,7 +142,9 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
             if (time) {
                 double t = detail::load_scalar(p + time->offset, scalar_type(time->datatype), m.big_endian) * time_scale;
                 if (absolute) t -= stamp_s;
-                if (!std::isfinite(t)) throw fail("point " + std::to_string(std::size_t{row} * m.width + col) + " has a time that is not finite");
+                if (!(std::abs(t) <= kMaxPointTime))
+                    throw fail("point " + std::to_string(std::size_t{row} * m.width + col) + " has a time of " + std::to_string(t) +
+                               " s from the stamp (not finite, or over an hour away)");
                 scan.times.push_back(static_cast<float>(t));
             }
         }

@@ -2,11 +2,28 @@
 #include "lidarsurf/io/recorded_drive.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
+namespace {
+
+// A point's time (s after the stamp) in ns; FormatError for times no sweep has (over an hour).
+std::int64_t offset_ns(double seconds, const std::filesystem::path& path) {
+    if (!(std::abs(seconds) <= 3600)) throw FormatError(path.string() + ": a point measured " + std::to_string(seconds) + " s from its scan's stamp");
+    return static_cast<std::int64_t>(std::llround(1e9 * seconds));
+}
+
+// stamp + offset, FormatError past the clock's range.
+std::int64_t at_offset(std::int64_t stamp, double seconds, const std::filesystem::path& path) {
+    std::int64_t t = 0;
+    if (__builtin_add_overflow(stamp, offset_ns(seconds, path), &t)) throw FormatError(path.string() + ": a stamp past the clock's range");
+    return t;
+}
+
+}  // namespace
 
 RecordedDrive::RecordedDrive(std::filesystem::path path, Trajectory trajectory, RecordedDriveOptions options)
     : path_(std::move(path)), trajectory_(std::move(trajectory)), options_(std::move(options)) {
@@ -21,8 +38,8 @@ RecordedDrive::RecordedDrive(std::filesystem::path path, Trajectory trajectory, 
         std::int64_t first = scan.stamp_ns, last = scan.stamp_ns;
         if (options_.deskew && !scan.times.empty()) {
             const auto [lo, hi] = std::minmax_element(scan.times.begin(), scan.times.end());
-            first += static_cast<std::int64_t>(1e9 * *lo);
-            last += static_cast<std::int64_t>(1e9 * *hi);
+            first = at_offset(scan.stamp_ns, *lo, path_);
+            last = at_offset(scan.stamp_ns, *hi, path_);
         }
         const auto pose = trajectory_.at(scan.stamp_ns);
         if (!pose || !trajectory_.at(first) || !trajectory_.at(last)) continue;
@@ -59,7 +76,7 @@ void RecordedDrive::move_by_time(RecordedScan& s, const Eigen::Isometry3d& fallb
     for (std::size_t i = 0; i < s.cloud.points.size(); ++i) {
         if (s.times[i] != last_time) {
             last_time = s.times[i];
-            const auto p = trajectory_.at(s.stamp_ns + static_cast<std::int64_t>(1e9 * static_cast<double>(last_time)));
+            const auto p = trajectory_.at(at_offset(s.stamp_ns, last_time, path_));
             by = to(p ? *p : fallback);  // within the span: checked on the first reading
         }
         s.cloud.points[i] = by * s.cloud.points[i];

@@ -72,14 +72,14 @@ public:
 
 private:
     void close_sweep();
-    void convert_column(const std::uint8_t* column, int measurement_id, std::int64_t stamp_ns);
+    void convert_column(const std::uint8_t* column, int measurement_id, std::uint64_t stamp_ns);
 
     OusterMetadata meta_;
     OusterReturns returns_;
     std::vector<Eigen::Vector3d> direction_;  ///< per (column, beam): unit ray in the sensor frame
     std::vector<Eigen::Vector3d> offset_;     ///< per (column, beam): the ray's start (m)
     std::optional<std::uint32_t> frame_id_;
-    std::vector<std::int64_t> column_stamp_;  ///< per point of the sweep in progress
+    std::vector<std::uint64_t> column_stamp_;  ///< per point of the sweep in progress: its column's time (ns)
     std::vector<std::uint8_t> seen_;          ///< per column of the frame
     int columns_seen_ = 0;
     RecordedScan sweep_;
