@@ -126,9 +126,7 @@ RecordingOptions recording_options(const RecordingFlags& o) {
     RecordingOptions r;
     r.topic = o.topic;
     r.metadata = o.metadata;
-    if (o.returns == "first") r.returns = OusterReturns::First;
-    else if (o.returns == "both") r.returns = OusterReturns::Both;
-    else throw InvalidArgument("--returns must be first or both, not '" + o.returns + "'");
+    r.returns = parse_ouster_returns(o.returns);
     return r;
 }
 

@@ -86,8 +86,7 @@ void bind_recording(py::module_& m) {
             RecordingOptions o;
             o.topic = topic.value_or("");
             o.metadata = metadata.value_or("");
-            if (returns != "first" && returns != "both") throw InvalidArgument("returns must be 'first' or 'both', not '" + returns + "'");
-            o.returns = returns == "both" ? OusterReturns::Both : OusterReturns::First;
+            o.returns = parse_ouster_returns(returns);
             return std::make_unique<RecordingScans>(path, o, poses, times, deskew);
         },
         py::arg("path"), py::arg("topic") = py::none(), py::arg("poses") = py::none(), py::arg("metadata") = py::none(),

@@ -189,6 +189,17 @@ OusterMetadata parse_ouster_metadata(std::string_view text, const std::string& n
     return m;
 }
 
+OusterReturns parse_ouster_returns(std::string_view name) {
+    if (name == "first") return OusterReturns::First;
+    if (name == "both") return OusterReturns::Both;
+    throw InvalidArgument("returns must be first or both, not '" + std::string(name) + "'");
+}
+
+std::string describe_ouster(const OusterMetadata& m) {
+    return "Ouster " + (m.prod_line.empty() ? std::string("sensor") : m.prod_line) + ", " + std::string(ouster_profile_name(m.profile)) + ", " +
+           std::to_string(m.pixels_per_column) + " x " + std::to_string(m.columns_per_frame);
+}
+
 OusterMetadata read_ouster_metadata(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path.string() + ": cannot open the Ouster metadata");

@@ -46,10 +46,7 @@ public:
     }
 
     std::string description() const override {
-        const auto& m = sweeps_.metadata();
-        return "Ouster " + (m.prod_line.empty() ? std::string("sensor") : m.prod_line) + ", " + std::string(ouster_profile_name(m.profile)) +
-               ", " + std::to_string(m.pixels_per_column) + " x " + std::to_string(m.columns_per_frame) + ", UDP port " +
-               std::to_string(m.udp_port_lidar) + ", pcap";
+        return describe_ouster(sweeps_.metadata()) + ", UDP port " + std::to_string(sweeps_.metadata().udp_port_lidar) + ", pcap";
     }
 
 private:

@@ -149,9 +149,7 @@ public:
 
     std::string description() const override {
         if (!sweeps_) return topic_ + " (sensor_msgs/PointCloud2), ROS 1 bag";
-        const auto& m = sweeps_->metadata();
-        return topic_ + " (Ouster " + (m.prod_line.empty() ? std::string("sensor") : m.prod_line) + ", " + std::string(ouster_profile_name(m.profile)) +
-               ", " + std::to_string(m.pixels_per_column) + " x " + std::to_string(m.columns_per_frame) + " packets), ROS 1 bag";
+        return topic_ + " (" + describe_ouster(sweeps_->metadata()) + " packets), ROS 1 bag";
     }
 
 private:

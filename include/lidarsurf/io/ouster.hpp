@@ -55,6 +55,11 @@ OusterMetadata read_ouster_metadata(const std::filesystem::path& path);
 
 enum class OusterReturns { First, Both };
 
+/// "first" or "both"; throws InvalidArgument otherwise.
+OusterReturns parse_ouster_returns(std::string_view name);
+/// "Ouster OS-1-64, LEGACY, 64 x 1024": the sensor, for reports.
+std::string describe_ouster(const OusterMetadata& metadata);
+
 /// Turns the lidar packets of one sensor into sweeps. A sweep ends when a packet of another
 /// frame id arrives (or at finish()); the partial sweeps at a recording's ends are kept, with
 /// their completeness.
