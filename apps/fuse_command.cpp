@@ -36,7 +36,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("dirs", o.dirs,
                   "Sequence directory: velodyne/000000.bin, ... with poses.txt (sensor-to-world lidar poses, as simulate "
                   "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt), "
-                  "or a recording (.pcap, ROS 1 .bag) with --poses, its sensor's timestamped trajectory. "
+                  "or a recording (.pcap, ROS 1 .bag, ROS 2 bag) with --poses, its sensor's timestamped trajectory. "
                   "Several: drives whose poses share one world frame, fused one after the other into one map")
         ->required();
     f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();

@@ -18,14 +18,14 @@ CLI::App* add_info_command(CLI::App& app, InfoOptions& o) {
         "Examples:\n"
         "  lidarsurf info OS-1-64.pcap           (metadata: OS-1-64.json beside it, or --metadata)\n"
         "  lidarsurf info drive.bag --topic /points --json info.json\n");
-    c->add_option("input", o.input, "A recording: .pcap (Ouster), ROS 1 .bag")->required();
+    c->add_option("input", o.input, "A recording: .pcap (Ouster), ROS 1 .bag, ROS 2 bag (its directory, .db3 or .mcap)")->required();
     add_recording_options(c, o.recording);
     c->add_option("--json", o.json, "Also write the summary as JSON");
     return c;
 }
 
 int run_info(const InfoOptions& o) {
-    if (!is_recording(o.input)) throw InvalidArgument(o.input + ": not a recording (.pcap, .bag); `info` describes recordings");
+    if (!is_recording(o.input)) throw InvalidArgument(o.input + ": not a recording (.pcap, .bag, a ROS 2 bag directory, .db3, .mcap); `info` describes recordings");
     const RecordingSummary s = summarize_recording(o.input, recording_options(o.recording));
     std::printf("%s: %s\n", o.input.c_str(), s.container.c_str());
     std::printf("  %-32s %-36s %9s %10s\n", "topic", "type", "messages", "span (s)");

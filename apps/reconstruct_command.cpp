@@ -21,7 +21,7 @@ CLI::App* add_reconstruct_command(CLI::App& app, ReconstructCommandOptions& o) {
         "  lidarsurf reconstruct 000000.bin -o imls.ply --method imls\n"
         "  lidarsurf reconstruct OS-1-64.pcap --scan 3 -o mesh.ply      (metadata: OS-1-64.json beside it)\n"
         "  lidarsurf reconstruct drive.bag --topic /points --scan 100 -o mesh.ply\n");
-    rc->add_option("input", o.input, "Input point cloud (.bin KITTI, .ply, .pcd, .xyz/.csv/.txt) or recording (.pcap, ROS 1 .bag)")->required();
+    rc->add_option("input", o.input, "Input point cloud (.bin KITTI, .ply, .pcd, .xyz/.csv/.txt) or recording (.pcap, ROS 1 .bag, ROS 2 bag: directory, .db3, .mcap)")->required();
     rc->add_option("--scan,--message", o.scan, "The scan of a recording to mesh, from 0 (lidarsurf info counts them)")->capture_default_str()->check(CLI::NonNegativeNumber);
     add_recording_options(rc, o.recording);
     rc->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj)")->required();

@@ -163,4 +163,79 @@ put("fuzz_point_cloud2", "float64_big.msg", cloud2([("x", 0, 8), ("y", 8, 8), ("
                                                    b"".join(struct.pack(">dddf", *p, 0.01 * i) for i, p in enumerate(PTS)), big=True))
 put("fuzz_point_cloud2", "organized.msg", cloud2([("x", 0, 7), ("y", 4, 7), ("z", 8, 7)], 12, 2, 3,
                                                  b"".join(struct.pack("<fff", *p) for p in PTS[:5]) + struct.pack("<fff", *[float("nan")] * 3)))
+
+# The same clouds in CDR (ROS 2): the encapsulation header, members aligned to their size from
+# its end, strings with their NUL; little and big endian.
+
+
+def cdr_cloud(fields, step, rows, cols, data, big=False):
+    e = ">" if big else "<"
+    out = bytearray(b"\x00\x00" if big else b"\x00\x01") + b"\x00\x00"
+
+    def align(n):
+        while (len(out) - 4) % n:
+            out.append(0)
+
+    def u32(v):
+        align(4)
+        out.extend(struct.pack(e + "I", v))
+
+    def string(s):
+        u32(len(s) + 1)
+        out.extend(s.encode() + b"\x00")
+
+    u32(100), u32(5), string("lidar"), u32(rows), u32(cols), u32(len(fields))
+    for name, off, ty in fields:
+        string(name), u32(off), out.append(ty), u32(1)
+    out.append(big)
+    u32(step), u32(step * cols), u32(len(data))
+    out.extend(data)
+    out.append(0)
+    return bytes(out)
+
+
+put("fuzz_cdr_point_cloud2", "float32_t.cdr", cdr_cloud([("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("t", 16, 6)], 24, 1, len(PTS),
+                                                        b"".join(struct.pack("<fff4xI4x", *p, 1000 * i) for i, p in enumerate(PTS))))
+put("fuzz_cdr_point_cloud2", "float64_big.cdr", cdr_cloud([("x", 0, 8), ("y", 8, 8), ("z", 16, 8), ("time", 24, 7)], 28, 1, len(PTS),
+                                                          b"".join(struct.pack(">dddf", *p, 0.01 * i) for i, p in enumerate(PTS)), big=True))
+
+# MCAP (fuzz_mcap.cpp): a schema, a channel and two PointCloud2 messages; unchunked, in an
+# uncompressed chunk with its CRC, in zstd and lz4 chunks (Debian's zstd and lz4 tools), and with
+# a summary section.
+import subprocess
+import zlib
+
+MAGIC = b"\x89MCAP0\r\n"
+
+
+def record(op, content):
+    return bytes([op]) + struct.pack("<Q", len(content)) + content
+
+
+def mstr(s):
+    return struct.pack("<I", len(s)) + s.encode()
+
+
+def mcap(chunk=None, summary=False):
+    cloud = cdr_cloud([("x", 0, 7), ("y", 4, 7), ("z", 8, 7)], 12, 1, len(PTS), b"".join(struct.pack("<fff", *p) for p in PTS))
+    schema = record(3, struct.pack("<H", 1) + mstr("sensor_msgs/msg/PointCloud2") + mstr("ros2msg") + mstr(""))
+    channel = record(4, struct.pack("<HH", 1, 1) + mstr("/points") + mstr("cdr") + struct.pack("<I", 0))
+    messages = b"".join(record(5, struct.pack("<HIQQ", 1, k, 100 + k, 100 + k) + cloud) for k in range(2))
+    data = schema + channel + messages
+    if chunk is not None:
+        packed = {"": data, "zstd": subprocess.run(["zstd", "-q", "-c"], input=data, capture_output=True).stdout,
+                  "lz4": subprocess.run(["lz4", "-q", "-c"], input=data, capture_output=True).stdout}[chunk]
+        data = record(6, struct.pack("<QQQI", 100, 101, len(data), zlib.crc32(data)) + mstr(chunk) + struct.pack("<Q", len(packed)) + packed)
+    out = MAGIC + record(1, mstr("ros2") + mstr("seed")) + data + record(15, struct.pack("<I", 0))
+    start = 0
+    if summary:
+        start = len(out)
+        out += schema + channel
+    return out + record(2, struct.pack("<QQI", start, 0, 0)) + MAGIC
+
+
+put("fuzz_mcap", "plain.mcap", mcap())
+put("fuzz_mcap", "chunk.mcap", mcap(""))
+put("fuzz_mcap", "zstd.mcap", mcap("zstd", summary=True))
+put("fuzz_mcap", "lz4.mcap", mcap("lz4"))
 print("corpus written to", root, file=sys.stderr)

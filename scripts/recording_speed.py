@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Read speed of recordings (docs/inputs.md, "Read speed"): writes 30 s of an Ouster pcap (the
-OS-2-128 sweep of ../shared/data repeated with new frame ids) and of a ROS 1 bag of HDL-64E-sized
-PointCloud2 messages (ROS's own writer), then times `lidarsurf info` on each (median of 3).
+OS-2-128 sweep of ../shared/data repeated with new frame ids), of a ROS 1 bag of HDL-64E-sized
+PointCloud2 messages (ROS's own writer), and of the same messages in CDR as a ROS 2 sqlite3 bag and
+as an MCAP file of zstd chunks (Debian's zstd), then times `lidarsurf info` on each (median of 3).
 
 Usage: recording_speed.py LIDARSURF WORK_DIR [SCANS]   (Debian's /usr/bin/python3: rosbag, numpy)"""
 import os
@@ -39,11 +40,7 @@ def long_pcap(path, scans):
     shutil.copy(os.path.join(SHARED, OUSTER + ".json"), path[:-5] + ".json")
 
 
-def long_bag(path, scans):
-    import rosbag
-    import rospy
-    from sensor_msgs.msg import PointCloud2, PointField
-    from std_msgs.msg import Header
+def hdl64_points():
     n = 125000
     dt = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"), ("ring", "<u2"), ("pad", "<u2"), ("time", "<f4")])
     a = np.zeros(n, dt)
@@ -51,6 +48,19 @@ def long_bag(path, scans):
     az, r, el = rng.uniform(0, 2 * np.pi, n), rng.uniform(3, 60, n), rng.uniform(-0.4, 0.03, n)
     a["x"], a["y"], a["z"] = r * np.cos(az) * np.cos(el), r * np.sin(az) * np.cos(el), r * np.sin(el)
     a["time"], a["ring"] = az / (2 * np.pi) * 0.1, np.arange(n) % 64
+    return a
+
+
+FIELDS = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 12, 7), ("ring", 16, 4), ("time", 20, 7)]
+
+
+def long_bag(path, scans):
+    import rosbag
+    import rospy
+    from sensor_msgs.msg import PointCloud2, PointField
+    from std_msgs.msg import Header
+    a = hdl64_points()
+    n = len(a)
     fields = [PointField("x", 0, 7, 1), PointField("y", 4, 7, 1), PointField("z", 8, 7, 1), PointField("intensity", 12, 7, 1),
               PointField("ring", 16, 4, 1), PointField("time", 20, 7, 1)]
     with rosbag.Bag(path, "w") as bag:
@@ -58,6 +68,55 @@ def long_bag(path, scans):
             stamp = rospy.Time.from_sec(100 + 0.1 * k)
             bag.write("/velodyne_points", PointCloud2(header=Header(frame_id="velodyne", stamp=stamp), height=1, width=n, fields=fields,
                                                       point_step=24, row_step=24 * n, data=a.tobytes(), is_dense=True), stamp)
+
+
+def cdr_cloud(k, a):
+    """sensor_msgs/msg/PointCloud2 in little-endian CDR: every member here is 4-byte aligned as written."""
+    def string(t):
+        b = t.encode() + b"\0"
+        return struct.pack("<I", len(b)) + b + b"\0" * (-len(b) % 4)
+    out = b"\0\1\0\0" + struct.pack("<iI", 100 + k // 10, (k % 10) * 100000000) + string("velodyne")
+    out += struct.pack("<III", 1, len(a), len(FIELDS))
+    for name, offset, datatype in FIELDS:
+        out += string(name) + struct.pack("<IB3xI", offset, datatype, 1)
+    return out + struct.pack("<B3xIII", 0, 24, 24 * len(a), 24 * len(a)) + a.tobytes() + b"\1"
+
+
+def long_db3(path, scans):
+    import sqlite3
+    shutil.rmtree(path, ignore_errors=True)
+    os.makedirs(path)
+    db = sqlite3.connect(os.path.join(path, "long_0.db3"))
+    db.executescript("CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, serialization_format TEXT, offered_qos_profiles TEXT);"
+                     "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, timestamp INTEGER, data BLOB);"
+                     "INSERT INTO topics VALUES (1, '/velodyne_points', 'sensor_msgs/msg/PointCloud2', 'cdr', '');")
+    a = hdl64_points()
+    for k in range(scans):
+        db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?, ?)", ((100 * 10 + k) * 10**8, cdr_cloud(k, a)))
+    db.commit()
+    open(os.path.join(path, "metadata.yaml"), "w").write("rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n"
+                                                          "  relative_file_paths:\n    - long_0.db3\n")
+
+
+def long_mcap(path, scans):
+    import zlib
+    record = lambda op, content: bytes([op]) + struct.pack("<Q", len(content)) + content
+    text = lambda t: struct.pack("<I", len(t)) + t.encode()
+    a = hdl64_points()
+    schema = record(3, struct.pack("<H", 1) + text("sensor_msgs/msg/PointCloud2") + text("ros2msg") + text(""))
+    channel = record(4, struct.pack("<HH", 1, 1) + text("/velodyne_points") + text("cdr") + struct.pack("<I", 0))
+    with open(path, "wb") as f:  # as a ROS 2 recorder writes it: chunks with their message indexes, a summary
+        f.write(b"\x89MCAP0\r\n" + record(1, text("ros2") + text("recording_speed.py")))
+        for k in range(scans):  # a chunk a message, as with a chunk size under a scan's
+            t = (100 * 10 + k) * 10**8
+            prefix = schema + channel if k == 0 else b""
+            raw = prefix + record(5, struct.pack("<HIQQ", 1, k, t, t) + cdr_cloud(k, a))
+            packed = subprocess.run(["zstd", "-q", "-1", "-c"], input=raw, capture_output=True, check=True).stdout
+            f.write(record(6, struct.pack("<QQQI", t, t, len(raw), zlib.crc32(raw)) + text("zstd") + struct.pack("<Q", len(packed)) + packed))
+            f.write(record(7, struct.pack("<HIQQ", 1, 16, t, len(prefix))))
+        f.write(record(15, struct.pack("<I", 0)))
+        start = f.tell()
+        f.write(schema + channel + record(2, struct.pack("<QQI", start, 0, 0)) + b"\x89MCAP0\r\n")
 
 
 def timed(cli, path):
@@ -74,12 +133,15 @@ def main():
     cli, work = sys.argv[1], sys.argv[2]
     scans = int(sys.argv[3]) if len(sys.argv) > 3 else 300
     os.makedirs(work, exist_ok=True)
-    rows = [("Ouster OS-2-128 pcap", os.path.join(work, "long.pcap"), long_pcap), ("ROS 1 bag, PointCloud2", os.path.join(work, "long.bag"), long_bag)]
+    rows = [("Ouster OS-2-128 pcap", os.path.join(work, "long.pcap"), long_pcap), ("ROS 1 bag, PointCloud2", os.path.join(work, "long.bag"), long_bag),
+            ("ROS 2 bag (sqlite3), PointCloud2", os.path.join(work, "long_db3"), long_db3),
+            ("MCAP, zstd chunks, PointCloud2", os.path.join(work, "long.mcap"), long_mcap)]
     print("| recording | size | scans | time | real time x | peak memory |\n|---|---|---|---|---|---|")
     for name, path, write in rows:
         write(path, scans)
         seconds, peak = timed(cli, path)
-        print("| %s | %d MB | %d | %.2f s | %.0f | %.0f MiB |" % (name, os.path.getsize(path) / 1e6, scans, seconds, 0.1 * scans / seconds, peak))
+        size = sum(os.path.getsize(os.path.join(path, f)) for f in os.listdir(path)) if os.path.isdir(path) else os.path.getsize(path)
+        print("| %s | %d MB | %d | %.2f s | %.0f | %.0f MiB |" % (name, size / 1e6, scans, seconds, 0.1 * scans / seconds, peak))
 
 
 if __name__ == "__main__":

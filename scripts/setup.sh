@@ -22,6 +22,8 @@ PKGS=(
   python3-distributed  # Dask: a map fused in tiles on many workers (lidarsurf.fuse_tiles)
   libpcap-dev          # recordings: packet captures (Ouster pcaps)
   librosbag-storage-dev  # recordings: ROS 1's own bag reader (optional: the build reads no bags without it)
+  libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev  # recordings: ROS 2 bags (.db3; MCAP chunks and their CRC)
+  lz4                  # tests: LZ4 frames of the MCAP chunks the tests write
   python3-rosbag python3-sensor-msgs  # tests: ROS 1 bags written by ROS's own writer
 )
 # npm fetches three.js for the viewer (below); a machine with Node.js from elsewhere has npm already,
@@ -61,6 +63,13 @@ viewer="$(cd "$(dirname "$0")/.." && pwd)/viewer"
 if [ ! -f "$viewer/node_modules/three/build/three.min.js" ]; then
   echo "setup: npm ci in $viewer (three.js for lidarsurf view)"
   (cd "$viewer" && npm ci --no-audit --no-fund --loglevel=error)
+fi
+# The format maintainers' MCAP and CDR writers (the pinned versions of tests/io/ros2/package-lock.json)
+# that write the ROS 2 bags of the tests.
+ros2_writers="$(cd "$(dirname "$0")/.." && pwd)/tests/io/ros2"
+if [ ! -d "$ros2_writers/node_modules/@mcap/core" ]; then
+  echo "setup: npm ci in $ros2_writers (@mcap/core and @foxglove/cdr for the ROS 2 bag tests)"
+  (cd "$ros2_writers" && npm ci --no-audit --no-fund --loglevel=error)
 fi
 # `setup.sh viewer`: playwright-core (the pinned version of tests/viewer/package-lock.json), which
 # drives Debian's Chromium through the live view in make viewer-check; it downloads no browser.

@@ -1,4 +1,4 @@
-// lidarsurf.read_recording: the scans of a recording (pcap, ROS 1 bag) for users' own pipelines,
+// lidarsurf.read_recording: the scans of a recording (pcap, ROS 1 bag, ROS 2 bag) for users' own pipelines,
 // one at a time, with their poses when a trajectory is given.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -92,7 +92,7 @@ void bind_recording(py::module_& m) {
         py::arg("path"), py::arg("topic") = py::none(), py::arg("poses") = py::none(), py::arg("metadata") = py::none(),
         py::arg("times") = py::none(), py::arg("deskew") = true, py::arg("returns") = "first",
         "The scans of a recording (an Ouster .pcap with its metadata JSON beside it or `metadata`, a ROS 1 .bag of\n"
-        "PointCloud2 or Ouster packets on `topic`), one at a time, as tuples (stamp_ns, points, times, pose):\n"
+        "PointCloud2 or Ouster packets on `topic`, a ROS 2 bag of PointCloud2: its directory, a .db3 or a .mcap), one at a time, as tuples (stamp_ns, points, times, pose):\n"
         "points (N, 3) float64 in the sensor frame; times (N,) float32 seconds after stamp_ns, or None when the\n"
         "recording has none; pose the 4x4 sensor-to-world matrix at stamp_ns from the trajectory `poses` (TUM, or\n"
         "KITTI poses with their `times`), or None without one. With `poses`, only the scans within its span come,\n"

@@ -12,22 +12,42 @@ namespace {
 
 constexpr double kMaxPointTime = 3600;  // s from the stamp: a sweep lasts well under a second
 
-// Reads ROS 1 serialization (little endian) with every length checked against the buffer.
-class Ros1Reader {
+// Reads a serialized message with every length checked against the buffer: ROS 1 serialization
+// (little endian, packed, strings without a terminator) or CDR (ROS 2: either byte order, each
+// primitive aligned to its size from the end of the 4-byte encapsulation header, strings ending
+// in a NUL that their length counts).
+class MessageReader {
 public:
-    Ros1Reader(std::span<const std::uint8_t> bytes, const std::string& where) : bytes_(bytes), where_(where) {}
+    enum class Encoding { Ros1, Cdr };
+    MessageReader(std::span<const std::uint8_t> bytes, const std::string& where, Encoding encoding)
+        : bytes_(bytes), where_(where), cdr_(encoding == Encoding::Cdr) {
+        if (!cdr_) return;
+        need(4);
+        // Encapsulation kinds: 0 CDR big endian, 1 little endian; 6 and 7 plain XCDR2, which lays
+        // out a PointCloud2 the same way (none of its members is wider than 4 bytes).
+        const unsigned kind = bytes_[0] * 256u + bytes_[1];
+        if (kind != 0 && kind != 1 && kind != 6 && kind != 7)
+            throw FormatError(where_ + ": CDR encapsulation kind " + std::to_string(kind) + " (only plain CDR, kinds 0, 1, 6 and 7, is read)");
+        big_endian_ = kind % 2 == 0;
+        at_ = origin_ = 4;
+    }
     template <typename T>
     T scalar() {
+        if (cdr_) at_ = origin_ + (at_ - origin_ + sizeof(T) - 1) / sizeof(T) * sizeof(T);
         need(sizeof(T));
-        T v;
-        std::memcpy(&v, bytes_.data() + at_, sizeof v);
+        const T v = detail::load<T>(reinterpret_cast<const char*>(bytes_.data() + at_), big_endian_);
         at_ += sizeof(T);
         return v;
     }
     std::string string() {
         const std::uint32_t n = scalar<std::uint32_t>();
         need(n);
-        std::string s(reinterpret_cast<const char*>(bytes_.data() + at_), n);
+        std::size_t length = n;
+        if (cdr_) {
+            if (n == 0 || bytes_[at_ + n - 1] != 0) throw FormatError(where_ + ": a CDR string without its terminating NUL at byte " + std::to_string(at_));
+            --length;
+        }
+        std::string s(reinterpret_cast<const char*>(bytes_.data() + at_), length);
         at_ += n;
         return s;
     }
@@ -40,38 +60,29 @@ public:
 
 private:
     void need(std::size_t n) const {
-        if (n > bytes_.size() - at_)
+        if (at_ > bytes_.size() || n > bytes_.size() - at_)
             throw FormatError(where_ + ": PointCloud2 truncated: " + std::to_string(n) + " bytes needed at byte " + std::to_string(at_) +
                               " of " + std::to_string(bytes_.size()));
     }
     std::span<const std::uint8_t> bytes_;
     const std::string& where_;
-    std::size_t at_ = 0;
+    bool cdr_ = false, big_endian_ = false;
+    std::size_t at_ = 0, origin_ = 0;
 };
 
-detail::ScalarType scalar_type(std::uint8_t datatype) {
-    using detail::ScalarType;
-    constexpr ScalarType types[] = {ScalarType::Int8,  ScalarType::UInt8,  ScalarType::Int16,   ScalarType::UInt16,
-                                    ScalarType::Int32, ScalarType::UInt32, ScalarType::Float32, ScalarType::Float64};
-    return types[datatype - 1];
-}
-
-const PointField2* field_named(const PointCloud2Message& m, std::initializer_list<const char*> names) {
-    for (const char* n : names)
-        for (const auto& f : m.fields)
-            if (f.name == n) return &f;
-    return nullptr;
-}
-
-}  // namespace
-
-PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where) {
-    Ros1Reader r(bytes, where);
+// sensor_msgs/PointCloud2 in the order of its .msg file, the same in ROS 1 and ROS 2 but for the
+// header: ROS 1's has a sequence number and an unsigned second.
+PointCloud2Message parse_point_cloud2(MessageReader& r, bool ros1, const std::string& where) {
     PointCloud2Message m;
-    r.scalar<std::uint32_t>();  // header.seq
-    const auto sec = r.scalar<std::uint32_t>();
+    std::int64_t sec = 0;
+    if (ros1) {
+        r.scalar<std::uint32_t>();  // header.seq
+        sec = r.scalar<std::uint32_t>();
+    } else {
+        sec = r.scalar<std::int32_t>();
+    }
     const auto nsec = r.scalar<std::uint32_t>();
-    m.stamp_ns = static_cast<std::int64_t>(sec) * 1000000000 + nsec;
+    m.stamp_ns = sec * 1000000000 + nsec;
     m.frame_id = r.string();
     m.height = r.scalar<std::uint32_t>();
     m.width = r.scalar<std::uint32_t>();
@@ -91,6 +102,32 @@ PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, 
     m.data = r.bytes(r.scalar<std::uint32_t>());
     r.scalar<std::uint8_t>();  // is_dense: not trusted, every point is checked
     return m;
+}
+
+detail::ScalarType scalar_type(std::uint8_t datatype) {
+    using detail::ScalarType;
+    constexpr ScalarType types[] = {ScalarType::Int8,  ScalarType::UInt8,  ScalarType::Int16,   ScalarType::UInt16,
+                                    ScalarType::Int32, ScalarType::UInt32, ScalarType::Float32, ScalarType::Float64};
+    return types[datatype - 1];
+}
+
+const PointField2* field_named(const PointCloud2Message& m, std::initializer_list<const char*> names) {
+    for (const char* n : names)
+        for (const auto& f : m.fields)
+            if (f.name == n) return &f;
+    return nullptr;
+}
+
+}  // namespace
+
+PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where) {
+    MessageReader r(bytes, where, MessageReader::Encoding::Ros1);
+    return parse_point_cloud2(r, true, where);
+}
+
+PointCloud2Message parse_cdr_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where) {
+    MessageReader r(bytes, where, MessageReader::Encoding::Cdr);
+    return parse_point_cloud2(r, false, where);
 }
 
 RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string& where, std::size_t* no_returns) {
@@ -128,13 +165,25 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
     if (time) scan.times.reserve(n);
     std::size_t empty = 0;
     const double stamp_s = 1e-9 * static_cast<double>(m.stamp_ns);
+    // The usual layout (float32 x, y, z in the host's byte order) is read without the general
+    // loader's per-value dispatch.
+    const bool float32_xyz = !m.big_endian && xyz[0]->datatype == 7 && xyz[1]->datatype == 7 && xyz[2]->datatype == 7;
     for (std::uint32_t row = 0; row < m.height; ++row) {
         const auto* base = reinterpret_cast<const char*>(m.data.data()) + std::size_t{row} * m.row_step;
         for (std::uint32_t col = 0; col < m.width; ++col) {
             const char* p = base + std::size_t{col} * m.point_step;
             Eigen::Vector3d v;
-            for (int a = 0; a < 3; ++a) v[a] = detail::load_scalar(p + xyz[a]->offset, scalar_type(xyz[a]->datatype), m.big_endian);
-            if (!v.allFinite() || v.isZero()) {  // organized clouds mark a ray without return so
+            if (float32_xyz) {
+                for (int a = 0; a < 3; ++a) {
+                    float f;
+                    std::memcpy(&f, p + xyz[a]->offset, sizeof f);
+                    v[a] = f;
+                }
+            } else {
+                for (int a = 0; a < 3; ++a) v[a] = detail::load_scalar(p + xyz[a]->offset, scalar_type(xyz[a]->datatype), m.big_endian);
+            }
+            const bool finite = std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+            if (!finite || (v.x() == 0 && v.y() == 0 && v.z() == 0)) {  // organized clouds mark a ray without return so
                 ++empty;
                 continue;
             }

@@ -12,15 +12,10 @@
 namespace lidarsurf {
 namespace {
 
-std::string lower_extension(const std::filesystem::path& path) {
-    std::string e = path.extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return e;
-}
-
-bool is_ros2_bag_directory(const std::filesystem::path& path) {
-    std::error_code ec;
-    return std::filesystem::is_directory(path, ec) && std::filesystem::exists(path / "metadata.yaml", ec);
+std::string joined(const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
 }
 
 class OusterPcapSource final : public ScanSource {
@@ -59,6 +54,43 @@ private:
 
 namespace detail {
 
+std::string lower_extension(const std::filesystem::path& path) {
+    std::string e = path.extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return e;
+}
+
+std::string type_of(const std::vector<TopicType>& topics, const std::string& topic) {
+    for (const auto& t : topics)
+        if (t.name == topic) return t.type;
+    return {};
+}
+
+std::string choose_scan_topic(const std::vector<TopicType>& topics, const std::string& requested, const std::string& cloud_type,
+                              const std::string& packet_type, const std::string& where) {
+    const auto of_type = [&](const std::string& type) {
+        std::vector<std::string> out;
+        for (const auto& t : topics)
+            if (t.type == type && t.name.find("imu") == std::string::npos && std::find(out.begin(), out.end(), t.name) == out.end())
+                out.push_back(t.name);
+        return out;
+    };
+    if (!requested.empty()) {
+        const std::string type = type_of(topics, requested);
+        if (type.empty()) throw InvalidArgument(where + ": no topic " + requested + " in the recording");
+        if (type != cloud_type && type != packet_type)
+            throw InvalidArgument(where + ": topic " + requested + " carries " + type + ", not " + cloud_type + (packet_type.empty() ? "" : " or Ouster packets"));
+        return requested;
+    }
+    const auto clouds = of_type(cloud_type);
+    const auto packets = packet_type.empty() ? std::vector<std::string>{} : of_type(packet_type);
+    if (clouds.size() > 1) throw InvalidArgument(where + ": several " + cloud_type + " topics (" + joined(clouds) + "): choose one with --topic");
+    if (clouds.size() == 1) return clouds.front();
+    if (packets.size() > 1) throw InvalidArgument(where + ": several Ouster packet topics (" + joined(packets) + "): choose one with --topic");
+    if (packets.size() == 1) return packets.front();
+    throw InvalidArgument(where + ": no " + cloud_type + (packet_type.empty() ? "" : " or Ouster packet") + " topic in the recording");
+}
+
 std::unique_ptr<ScanSource> open_ouster_pcap(const std::filesystem::path& path, const RecordingOptions& options) {
     std::filesystem::path metadata = options.metadata;
     if (metadata.empty()) {
@@ -92,18 +124,18 @@ std::vector<TopicSummary> pcap_topics(const std::filesystem::path& path) {
 }  // namespace detail
 
 bool is_recording(const std::filesystem::path& path) {
-    const std::string e = lower_extension(path);
-    return e == ".pcap" || e == ".pcapng" || e == ".bag" || e == ".mcap" || e == ".db3" || is_ros2_bag_directory(path);
+    const std::string e = detail::lower_extension(path);
+    return e == ".pcap" || e == ".pcapng" || e == ".bag" || detail::is_ros2_bag(path);
 }
 
 std::unique_ptr<ScanSource> open_recording(const std::filesystem::path& path, const RecordingOptions& options) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw IoError(path.string() + ": no such file");
-    const std::string e = lower_extension(path);
+    const std::string e = detail::lower_extension(path);
     if (e == ".pcap" || e == ".pcapng") return detail::open_ouster_pcap(path, options);
     if (e == ".bag") return detail::open_ros1_bag(path, options);
-    throw InvalidInput(path.string() + ": a ROS 2 bag (MCAP or sqlite3): lidarsurf reads ROS 1 bags and pcaps so far; " +
-                       "convert it with `rosbags-convert` or `ros2 bag convert` to a ROS 1 bag");
+    if (detail::is_ros2_bag(path)) return detail::open_ros2_bag(path, options);
+    throw InvalidInput(path.string() + ": not a recording lidarsurf reads (pcap, ROS 1 bag, ROS 2 bag: a directory with metadata.yaml, .db3 or .mcap)");
 }
 
 RecordedScan read_recorded_scan(const std::filesystem::path& path, std::size_t index, const RecordingOptions& options) {
@@ -118,10 +150,18 @@ RecordedScan read_recorded_scan(const std::filesystem::path& path, std::size_t i
 
 RecordingSummary summarize_recording(const std::filesystem::path& path, const RecordingOptions& options) {
     RecordingSummary s;
-    const std::string e = lower_extension(path);
+    const std::string e = detail::lower_extension(path);
     auto source = open_recording(path, options);
-    s.container = e == ".bag" ? "ROS 1 bag" : "pcap";
-    s.topics = e == ".bag" ? detail::ros1_bag_topics(path) : detail::pcap_topics(path);
+    if (e == ".bag") {
+        s.container = "ROS 1 bag";
+        s.topics = detail::ros1_bag_topics(path);
+    } else if (detail::is_ros2_bag(path)) {
+        s.container = "ROS 2 bag";
+        s.topics = detail::ros2_bag_topics(path);
+    } else {
+        s.container = "pcap";
+        s.topics = detail::pcap_topics(path);
+    }
     s.source = source->description();
     RecordedScan scan;
     bool times = true;

@@ -7,6 +7,21 @@
 
 namespace lidarsurf::detail {
 
+/// The file name's extension in lower case, with its dot (".mcap").
+std::string lower_extension(const std::filesystem::path& path);
+
+struct TopicType {
+    std::string name, type;
+};
+
+/// The topic scans are read from: `requested` when given (InvalidArgument when it is not there
+/// or carries neither type), else the only topic of `cloud_type`, else the only one of
+/// `packet_type` (IMU packet topics left out). InvalidArgument when there are several or none.
+std::string choose_scan_topic(const std::vector<TopicType>& topics, const std::string& requested, const std::string& cloud_type,
+                              const std::string& packet_type, const std::string& where);
+/// The type of `topic` in `topics`, empty when absent.
+std::string type_of(const std::vector<TopicType>& topics, const std::string& topic);
+
 std::unique_ptr<ScanSource> open_ouster_pcap(const std::filesystem::path& path, const RecordingOptions& options);
 std::vector<TopicSummary> pcap_topics(const std::filesystem::path& path);
 
@@ -14,5 +29,10 @@ std::vector<TopicSummary> pcap_topics(const std::filesystem::path& path);
 /// throw InvalidInput saying how to build with it.
 std::unique_ptr<ScanSource> open_ros1_bag(const std::filesystem::path& path, const RecordingOptions& options);
 std::vector<TopicSummary> ros1_bag_topics(const std::filesystem::path& path);
+
+/// ROS 2 bags: a directory with metadata.yaml and its .db3 (sqlite3) or .mcap files, or one such file.
+bool is_ros2_bag(const std::filesystem::path& path);
+std::unique_ptr<ScanSource> open_ros2_bag(const std::filesystem::path& path, const RecordingOptions& options);
+std::vector<TopicSummary> ros2_bag_topics(const std::filesystem::path& path);
 
 }  // namespace lidarsurf::detail

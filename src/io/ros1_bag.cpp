@@ -62,32 +62,11 @@ std::span<const std::uint8_t> sized_bytes(const std::vector<std::uint8_t>& body,
     return std::span<const std::uint8_t>(body).subspan(4);
 }
 
-struct Topics {
-    std::vector<std::pair<std::string, std::string>> all;  // topic, type
-    std::vector<std::string> of_type(const std::string& type) const {
-        std::vector<std::string> out;
-        for (const auto& [t, ty] : all)
-            if (ty == type && std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
-        return out;
-    }
-    std::string type_of(const std::string& topic) const {
-        for (const auto& [t, ty] : all)
-            if (t == topic) return ty;
-        return {};
-    }
-};
-
-Topics topics_of(rosbag::Bag& bag) {
+std::vector<TopicType> topics_of(rosbag::Bag& bag) {
     rosbag::View view(bag);
-    Topics t;
-    for (const auto* c : view.getConnections()) t.all.emplace_back(c->topic, c->datatype);
+    std::vector<TopicType> t;
+    for (const auto* c : view.getConnections()) t.push_back({c->topic, c->datatype});
     return t;
-}
-
-std::string joined(const std::vector<std::string>& v) {
-    std::string s;
-    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s;
 }
 
 class Ros1BagSource final : public ScanSource {
@@ -95,23 +74,9 @@ public:
     Ros1BagSource(const std::filesystem::path& path, const RecordingOptions& options) : path_(path) {
         guarded(path_, [&] {
             bag_.open(path_.string(), rosbag::bagmode::Read);
-            const Topics topics = topics_of(bag_);
-            topic_ = options.topic;
-            if (topic_.empty()) {
-                auto clouds = topics.of_type(kPointCloud2);
-                auto packets = topics.of_type(kOusterPacket);
-                packets.erase(std::remove_if(packets.begin(), packets.end(), [](const std::string& t) { return t.find("imu") != std::string::npos; }),
-                              packets.end());
-                if (clouds.size() > 1) throw InvalidArgument(path_.string() + ": several PointCloud2 topics (" + joined(clouds) + "): choose one with --topic");
-                if (clouds.size() == 1) topic_ = clouds.front();
-                else if (packets.size() == 1) topic_ = packets.front();
-                else if (packets.size() > 1) throw InvalidArgument(path_.string() + ": several Ouster packet topics (" + joined(packets) + "): choose one with --topic");
-                else throw InvalidArgument(path_.string() + ": no sensor_msgs/PointCloud2 or Ouster packet topic in the bag");
-            }
-            type_ = topics.type_of(topic_);
-            if (type_.empty()) throw InvalidArgument(path_.string() + ": no topic " + topic_ + " in the bag");
-            if (type_ != kPointCloud2 && type_ != kOusterPacket)
-                throw InvalidArgument(path_.string() + ": topic " + topic_ + " carries " + type_ + ", not sensor_msgs/PointCloud2 or Ouster packets");
+            const auto topics = topics_of(bag_);
+            topic_ = choose_scan_topic(topics, options.topic, kPointCloud2, kOusterPacket, path_.string());
+            type_ = type_of(topics, topic_);
             if (type_ == kOusterPacket) sweeps_.emplace(ouster_metadata(topics, options), options.returns);
             view_ = std::make_unique<rosbag::View>(bag_, rosbag::TopicQuery(topic_));
             it_ = view_->begin();
@@ -153,12 +118,12 @@ public:
     }
 
 private:
-    OusterMetadata ouster_metadata(const Topics& topics, const RecordingOptions& options) {
+    OusterMetadata ouster_metadata(const std::vector<TopicType>& topics, const RecordingOptions& options) {
         if (!options.metadata.empty()) return read_ouster_metadata(options.metadata);
         // The driver's metadata topic: a std_msgs/String beside the packets (/os_node/metadata).
         const std::string ns = topic_.substr(0, topic_.rfind('/'));
-        for (const auto& t : topics.of_type(kString)) {
-            if (t != ns + "/metadata") continue;
+        for (const auto& [t, type] : topics) {
+            if (type != kString || t != ns + "/metadata") continue;
             rosbag::View v(bag_, rosbag::TopicQuery(t));
             for (const auto& m : v) {
                 const auto body = message_bytes(m);

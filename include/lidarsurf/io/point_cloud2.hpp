@@ -1,6 +1,6 @@
 #pragma once
 // sensor_msgs/PointCloud2 as a ROS 1 bag stores it (ROS serialization: little endian, strings
-// and arrays prefixed by a uint32 length), decoded into a RecordedScan: x, y, z of any float
+// and arrays prefixed by a uint32 length) and as ROS 2 does (CDR), decoded into a RecordedScan: x, y, z of any float
 // type, the per-point time under the drivers' usual names, organized clouds with NaN or zero
 // for rays that returned nothing, padding inside point_step, and the big-endian flag.
 #include <cstdint>
@@ -32,6 +32,11 @@ struct PointCloud2Message {
 /// Parses a ROS 1 serialized sensor_msgs/PointCloud2. Throws FormatError naming `where` when a
 /// length runs past the buffer.
 PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where);
+
+/// Parses a ROS 2 sensor_msgs/msg/PointCloud2 in CDR (the encapsulation header, either byte
+/// order, members aligned to their size). Throws FormatError naming `where` when a length runs
+/// past the buffer, a string lacks its NUL, or the encapsulation is not plain CDR.
+PointCloud2Message parse_cdr_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where);
 
 /// The points of a PointCloud2 (rays that returned nothing left out and counted in
 /// `no_returns`). Per-point times: Ouster `t` (uint32 ns), Velodyne `time` (float32 s after the

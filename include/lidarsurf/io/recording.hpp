@@ -1,6 +1,7 @@
 #pragma once
-// Recordings of a robot's drive as scans: an Ouster pcap (with the sensor's metadata JSON) and a
-// ROS 1 bag of sensor_msgs/PointCloud2 or of the Ouster driver's raw packets. Scans are read one
+// Recordings of a robot's drive as scans: an Ouster pcap (with the sensor's metadata JSON), a
+// ROS 1 bag of sensor_msgs/PointCloud2 or of the Ouster driver's raw packets, and a ROS 2 bag
+// (rosbag2's directory, a .db3 or an .mcap) of sensor_msgs/msg/PointCloud2. Scans are read one
 // at a time (memory does not grow with the recording's length), in the recording's order.
 #include <cstdint>
 #include <filesystem>
@@ -33,9 +34,8 @@ public:
     virtual std::string description() const = 0;
 };
 
-/// True for the names of the recordings lidarsurf reads (.pcap, .pcapng, .bag) and of those it
-/// knows but does not read yet (.mcap, .db3, a ROS 2 bag directory), which open_recording
-/// refuses with an explanation.
+/// True for the names of the recordings lidarsurf reads: .pcap, .pcapng, .bag, .db3, .mcap and a
+/// directory holding metadata.yaml (a ROS 2 bag).
 bool is_recording(const std::filesystem::path& path);
 
 /// Opens a recording. Throws IoError (missing, unreadable), FormatError (malformed),
@@ -54,7 +54,7 @@ struct TopicSummary {
 };
 
 struct RecordingSummary {
-    std::string container;              ///< "pcap", "ROS 1 bag"
+    std::string container;              ///< "pcap", "ROS 1 bag", "ROS 2 bag"
     std::vector<TopicSummary> topics;
     std::string source;                 ///< ScanSource::description() of what scans are read from
     std::size_t scans = 0;

@@ -1,0 +1,294 @@
+// ROS 2 bags (see recording.hpp): rosbag2's directory (metadata.yaml and its storage files), or
+// one storage file alone; sqlite3 files through Debian's libsqlite3, MCAP files through
+// McapReader. Messages are CDR; sensor_msgs/msg/PointCloud2 is decoded by point_cloud2.
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <fstream>
+#include <optional>
+
+#include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/io/mcap.hpp"
+#include "lidarsurf/io/point_cloud2.hpp"
+#include "recording_sources.hpp"
+
+namespace lidarsurf::detail {
+namespace {
+
+constexpr const char* kPointCloud2 = "sensor_msgs/msg/PointCloud2";
+
+std::string trimmed(std::string s) {
+    const auto b = s.find_first_not_of(" \t\r");
+    const auto e = s.find_last_not_of(" \t\r");
+    s = b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+    if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) s = s.substr(1, s.size() - 2);
+    return s;
+}
+
+// The storage files of a bag, in order. Of metadata.yaml, rosbag2's own layout, only what says
+// where the messages are: the storage, the files and their compression.
+std::vector<std::filesystem::path> storage_files(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(path, ec)) return {path};
+    std::ifstream in(path / "metadata.yaml");
+    if (!in) throw IoError((path / "metadata.yaml").string() + ": cannot read");
+    std::vector<std::filesystem::path> files;
+    std::string line, compression_mode, compression_format;
+    bool in_list = false;
+    while (std::getline(in, line)) {
+        const std::string t = trimmed(line);
+        if (in_list && t.rfind("- ", 0) == 0) {
+            files.push_back(path / trimmed(t.substr(2)));
+            continue;
+        }
+        in_list = t == "relative_file_paths:";
+        if (t.rfind("compression_mode:", 0) == 0) compression_mode = trimmed(t.substr(17));
+        if (t.rfind("compression_format:", 0) == 0) compression_format = trimmed(t.substr(19));
+    }
+    if (!compression_mode.empty() && compression_mode != "NONE")
+        throw InvalidInput(path.string() + ": a bag compressed by rosbag2 (" + compression_format + " per " + compression_mode +
+                           "): decompress it first (`ros2 bag convert`, or `zstd -d` on each file of a FILE-compressed bag)");
+    if (files.empty()) {  // no list: the directory's storage files, by name
+        for (const auto& entry : std::filesystem::directory_iterator(path)) {
+            const std::string e = lower_extension(entry.path());
+            if (e == ".db3" || e == ".mcap") files.push_back(entry.path());
+        }
+        std::sort(files.begin(), files.end());
+        if (files.empty()) throw FormatError(path.string() + ": a ROS 2 bag directory without .db3 or .mcap files");
+    }
+    for (const auto& f : files)
+        if (!std::filesystem::exists(f, ec)) throw IoError(f.string() + ": no such file (listed in " + (path / "metadata.yaml").string() + ")");
+    return files;
+}
+
+// One sqlite3 storage file of rosbag2: tables topics(id, name, type, serialization_format) and
+// messages(id, topic_id, timestamp, data). Opened read-only and immutable: nothing is written
+// beside the bag, not even a lock or a journal.
+class Db3File {
+public:
+    explicit Db3File(const std::filesystem::path& path) : path_(path) {
+        std::string uri = "file:";
+        for (const unsigned char c : std::filesystem::absolute(path).string()) {
+            if (std::isalnum(c) || c == '/' || c == '.' || c == '-' || c == '_') {
+                uri += static_cast<char>(c);
+            } else {
+                char hex[4];
+                std::snprintf(hex, sizeof hex, "%%%02X", c);
+                uri += hex;
+            }
+        }
+        uri += "?immutable=1";
+        if (sqlite3_open_v2(uri.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) fail("cannot open");
+    }
+    ~Db3File() {
+        sqlite3_finalize(rows_);
+        sqlite3_close(db_);
+    }
+    Db3File(const Db3File&) = delete;
+    Db3File& operator=(const Db3File&) = delete;
+
+    std::vector<TopicSummary> topics() {
+        std::vector<TopicSummary> out;
+        sqlite3_stmt* s = prepare(
+            "SELECT t.name, t.type, t.serialization_format, COUNT(m.id), MIN(m.timestamp), MAX(m.timestamp) "
+            "FROM topics t LEFT JOIN messages m ON m.topic_id = t.id GROUP BY t.id ORDER BY t.id");
+        int rc;
+        while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
+            TopicSummary t;
+            t.name = text(s, 0);
+            t.type = text(s, 1);
+            const std::string format = text(s, 2);
+            if (format != "cdr") t.type += " (" + format + ")";
+            t.messages = static_cast<std::size_t>(sqlite3_column_int64(s, 3));
+            t.first_ns = sqlite3_column_int64(s, 4);
+            t.last_ns = sqlite3_column_int64(s, 5);
+            out.push_back(std::move(t));
+        }
+        sqlite3_finalize(s);
+        if (rc != SQLITE_DONE) fail("cannot list its topics");
+        return out;
+    }
+
+    /// Starts reading the messages of `topic`, in the order they were written.
+    void select(const std::string& topic) {
+        sqlite3_finalize(rows_);
+        rows_ = prepare("SELECT m.data, m.id FROM messages m JOIN topics t ON m.topic_id = t.id WHERE t.name = ?1 ORDER BY m.id");
+        sqlite3_bind_text(rows_, 1, topic.c_str(), static_cast<int>(topic.size()), SQLITE_TRANSIENT);
+    }
+
+    /// The next message of the selected topic: its bytes (valid until the next call) and its row
+    /// id; false at the end.
+    bool next(std::span<const std::uint8_t>& data, std::int64_t& row) {
+        const int rc = sqlite3_step(rows_);
+        if (rc == SQLITE_DONE) return false;
+        if (rc != SQLITE_ROW) fail("cannot read its messages");
+        const auto* bytes = static_cast<const std::uint8_t*>(sqlite3_column_blob(rows_, 0));
+        data = std::span<const std::uint8_t>(bytes, bytes ? static_cast<std::size_t>(sqlite3_column_bytes(rows_, 0)) : 0);
+        row = sqlite3_column_int64(rows_, 1);
+        return true;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& what) const {
+        throw FormatError(path_.string() + ": not a readable ROS 2 sqlite3 bag: " + what + ": " + (db_ ? sqlite3_errmsg(db_) : "out of memory"));
+    }
+    sqlite3_stmt* prepare(const char* sql) {
+        sqlite3_stmt* s = nullptr;
+        if (sqlite3_prepare_v2(db_, sql, -1, &s, nullptr) != SQLITE_OK) fail("no rosbag2 tables");
+        return s;
+    }
+    static std::string text(sqlite3_stmt* s, int column) {
+        const auto* t = sqlite3_column_text(s, column);
+        return t ? reinterpret_cast<const char*>(t) : "";
+    }
+
+    std::filesystem::path path_;
+    sqlite3* db_ = nullptr;
+    sqlite3_stmt* rows_ = nullptr;
+};
+
+bool is_mcap(const std::filesystem::path& file) { return lower_extension(file) == ".mcap"; }
+
+// The topics and types of an MCAP file: from its summary, else from a pass over its data.
+std::vector<TopicType> mcap_topic_types(const std::filesystem::path& file) {
+    McapReader reader(file);
+    if (!reader.read_summary_channels()) {
+        McapMessage m;
+        while (reader.next(m)) {
+        }
+    }
+    std::vector<TopicType> out;
+    for (const auto& [id, c] : reader.channels()) out.push_back({c.topic, c.schema_name});
+    return out;
+}
+
+// The topics of an MCAP file with their counts and spans: from the summary's channels and the
+// message indexes when it has both (the chunks are not inflated), else from its messages.
+std::vector<TopicSummary> mcap_topics(const std::filesystem::path& file) {
+    McapReader reader(file);
+    std::map<std::uint16_t, McapChannelStats> stats;
+    if (!reader.read_summary_channels() || !reader.index_stats(stats)) {
+        stats.clear();
+        McapMessage m;
+        while (reader.next(m)) {
+            auto& s = stats[m.channel->id];
+            ++s.messages;
+            s.first_ns = std::min(s.first_ns, m.log_time_ns);
+            s.last_ns = std::max(s.last_ns, m.log_time_ns);
+        }
+    }
+    std::vector<TopicSummary> out;
+    for (const auto& [id, c] : reader.channels()) {
+        TopicSummary t;
+        if (const auto s = stats.find(id); s != stats.end() && s->second.messages > 0) {
+            t.messages = s->second.messages;
+            t.first_ns = static_cast<std::int64_t>(s->second.first_ns);
+            t.last_ns = static_cast<std::int64_t>(s->second.last_ns);
+        }
+        t.name = c.topic;
+        t.type = c.schema_name + (c.message_encoding == "cdr" ? "" : " (" + c.message_encoding + ")");
+        out.push_back(std::move(t));
+    }
+    return out;
+}
+
+class Ros2BagSource final : public ScanSource {
+public:
+    Ros2BagSource(const std::filesystem::path& path, const RecordingOptions& options) : path_(path), files_(storage_files(path)) {
+        std::vector<TopicType> topics;
+        for (const auto& f : files_) {
+            if (is_mcap(f)) {
+                for (auto& t : mcap_topic_types(f)) topics.push_back(std::move(t));
+            } else {
+                for (const auto& t : Db3File(f).topics()) topics.push_back({t.name, t.type});
+            }
+        }
+        topic_ = choose_scan_topic(topics, options.topic, kPointCloud2, "", path_.string());
+    }
+
+    bool next(RecordedScan& scan) override {
+        for (;;) {
+            // The scan's stamp is its header's, as in every other recording; the recorder's
+            // receive time is not used.
+            std::span<const std::uint8_t> data;
+            std::string where;
+            if (mcap_) {
+                McapMessage m;
+                if (mcap_->next(m)) {
+                    if (m.channel->topic != topic_) continue;
+                    if (m.channel->message_encoding != "cdr")
+                        throw InvalidInput(mcap_->name() + ": topic " + topic_ + " is encoded as " + m.channel->message_encoding + ", not ROS 2's cdr");
+                    data = m.data;
+                    where = mcap_->name() + ": message " + std::to_string(message_) + " on " + topic_ + " (record at byte " + std::to_string(m.offset) + ")";
+                } else {
+                    mcap_.reset();
+                    continue;
+                }
+            } else if (db3_) {
+                std::int64_t row = 0;
+                if (db3_->next(data, row)) {
+                    where = files_[file_ - 1].string() + ": message " + std::to_string(message_) + " on " + topic_ + " (row " + std::to_string(row) + ")";
+                } else {
+                    db3_.reset();
+                    continue;
+                }
+            } else {
+                if (file_ == files_.size()) return false;
+                const auto& f = files_[file_++];
+                if (is_mcap(f)) {
+                    mcap_ = std::make_unique<McapReader>(f);
+                } else {
+                    db3_ = std::make_unique<Db3File>(f);
+                    db3_->select(topic_);
+                }
+                continue;
+            }
+            ++message_;
+            scan = decode_point_cloud2(parse_cdr_point_cloud2(data, where), where);
+            scan.index = scans_++;
+            return true;
+        }
+    }
+
+    std::string description() const override { return topic_ + " (" + kPointCloud2 + "), ROS 2 bag"; }
+
+private:
+    std::filesystem::path path_;
+    std::vector<std::filesystem::path> files_;
+    std::string topic_;
+    std::size_t file_ = 0, message_ = 0, scans_ = 0;
+    std::unique_ptr<McapReader> mcap_;
+    std::unique_ptr<Db3File> db3_;
+};
+
+}  // namespace
+
+bool is_ros2_bag(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return std::filesystem::exists(path / "metadata.yaml", ec);
+    const std::string e = lower_extension(path);
+    return e == ".db3" || e == ".mcap";
+}
+
+std::unique_ptr<ScanSource> open_ros2_bag(const std::filesystem::path& path, const RecordingOptions& options) {
+    return std::make_unique<Ros2BagSource>(path, options);
+}
+
+std::vector<TopicSummary> ros2_bag_topics(const std::filesystem::path& path) {
+    std::vector<TopicSummary> out;
+    for (const auto& f : storage_files(path)) {
+        for (auto& t : is_mcap(f) ? mcap_topics(f) : Db3File(f).topics()) {
+            auto same = std::find_if(out.begin(), out.end(), [&](const TopicSummary& o) { return o.name == t.name; });
+            if (same == out.end()) {
+                out.push_back(std::move(t));
+            } else if (t.messages > 0) {  // a topic over several files
+                same->first_ns = same->messages ? std::min(same->first_ns, t.first_ns) : t.first_ns;
+                same->last_ns = std::max(same->last_ns, t.last_ns);
+                same->messages += t.messages;
+            }
+        }
+    }
+    return out;
+}
+
+}  // namespace lidarsurf::detail
