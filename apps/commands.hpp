@@ -24,6 +24,7 @@ struct ReconstructCommandOptions {
     ReconstructOptions reconstruct;
     RecordingFlags recording;
     int scan = 0;  // the scan of a recording
+    double time = -1;  // or the scan nearest this many seconds after its first (-1: by --scan)
 };
 CLI::App* add_reconstruct_command(CLI::App& app, ReconstructCommandOptions& o);
 int run_reconstruct(const ReconstructCommandOptions& o);

@@ -20,9 +20,13 @@ CLI::App* add_reconstruct_command(CLI::App& app, ReconstructCommandOptions& o) {
         "  lidarsurf reconstruct sweep.bin --bin-fields 5 -o mesh.ply --voxel-size 0.1 --threads 2\n"
         "  lidarsurf reconstruct 000000.bin -o imls.ply --method imls\n"
         "  lidarsurf reconstruct OS-1-64.pcap --scan 3 -o mesh.ply      (metadata: OS-1-64.json beside it)\n"
-        "  lidarsurf reconstruct drive.bag --topic /points --scan 100 -o mesh.ply\n");
+        "  lidarsurf reconstruct drive.bag --topic /points --scan 100 -o mesh.ply\n"
+        "  lidarsurf reconstruct drive.mcap --time 12.5 -o mesh.ply     (the scan 12.5 s after the first)\n");
     rc->add_option("input", o.input, "Input point cloud (.bin KITTI, .ply, .pcd, .xyz/.csv/.txt) or recording (.pcap, ROS 1 .bag, ROS 2 bag: directory, .db3, .mcap)")->required();
-    rc->add_option("--scan,--message", o.scan, "The scan of a recording to mesh, from 0 (lidarsurf info counts them)")->capture_default_str()->check(CLI::NonNegativeNumber);
+    auto* scan = rc->add_option("--scan,--message", o.scan, "The scan of a recording to mesh, from 0 (lidarsurf info counts them)")
+                     ->capture_default_str()->check(CLI::NonNegativeNumber);
+    rc->add_option("--time", o.time, "Or the scan of a recording whose stamp is nearest T seconds after its first scan's")
+        ->check(CLI::NonNegativeNumber)->excludes(scan);
     add_recording_options(rc, o.recording);
     rc->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj)")->required();
     rc->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj")->capture_default_str();
@@ -44,10 +48,12 @@ int run_reconstruct(const ReconstructCommandOptions& o) {
     PointCloud cloud;
     std::string from = input;
     if (is_recording(input)) {
-        RecordedScan scan = read_recorded_scan(input, static_cast<std::size_t>(o.scan), recording_options(o.recording));
+        RecordedScan scan = o.time >= 0 ? read_recorded_scan_at(input, o.time, recording_options(o.recording))
+                                         : read_recorded_scan(input, static_cast<std::size_t>(o.scan), recording_options(o.recording));
         if (o.reconstruct.origin == ReconstructOptions{}.origin) m.sensor = scan.origin;  // the rays start at the sensor's lidar
         cloud = std::move(scan.cloud);
-        from += " scan " + std::to_string(o.scan);
+        from += " scan " + std::to_string(scan.index);
+        if (o.time >= 0) from += " (" + std::to_string(o.time) + " s asked for)";
     } else {
         cloud = read_points(input, m.read);
     }

@@ -51,13 +51,37 @@ LiveUpdate = _collections.namedtuple("LiveUpdate", ["scan", "pose", "delta"])
 LiveUpdate.__doc__ = """One scan of fuse_live(): its index in the sequence, the sensor's (4, 4) pose, and the MeshDelta."""
 
 
-def fuse_live(sequence, budget_ms=30.0, reconstructor=None, first=0, frames=0, step=1):
+def _is_recording(path):
+    ext = _os.path.splitext(path)[1].lower()
+    return ext in (".pcap", ".pcapng", ".bag", ".db3", ".mcap") or _os.path.isfile(_os.path.join(path, "metadata.yaml"))
+
+
+def fuse_live(sequence, budget_ms=30.0, reconstructor=None, first=0, frames=0, step=1, poses=None, times=None, topic=None):
     """Fuse a sequence (KITTI layout: velodyne/NNNNNN.bin and poses.txt, as `lidarsurf simulate` writes
     it) scan by scan, yielding a LiveUpdate after each: what `lidarsurf fuse --serve` streams to its
     page, for a viewer or planner of your own. Apply each delta's `removed`, then its `changed`, to a
     dict {key: Mesh} to hold the live mesh. Pass a Reconstructor (with your Config) to keep it: its
     extract_mesh() gives the exact mesh at the end: the triangles `fuse` writes.
+
+    `sequence` may be a recording (pcap, ROS 1 bag, ROS 2 bag) with `poses`, the sensor's trajectory
+    (TUM, or KITTI poses with their `times`), as read_recording takes them: its scans within the
+    trajectory's span, de-skewed, each from the sensor's position at its stamp; `first`, `frames`
+    and `step` count those scans.
     """
+    rec = reconstructor if reconstructor is not None else Reconstructor()
+    if _is_recording(sequence):
+        if poses is None:
+            raise ValueError(f"{sequence}: a recording needs the sensor's trajectory (poses=...)")
+        scans = read_recording(sequence, topic=topic, poses=poses, times=times)
+        last = first + frames * step if frames else None
+        for i, (_, points, _, pose) in enumerate(scans):
+            if last is not None and i >= last:
+                break
+            if i < first or (i - first) % step:
+                continue
+            rec.integrate_from(points @ pose[:3, :3].T + pose[:3, 3], pose[:3, 3])
+            yield LiveUpdate(i, pose, rec.update_mesh(budget_ms=budget_ms))
+        return
     poses = read_poses(_os.path.join(sequence, "poses.txt"))
     scans = sorted(f for f in _os.listdir(_os.path.join(sequence, "velodyne")) if f.endswith(".bin"))
     if len(poses) < len(scans):
@@ -65,7 +89,6 @@ def fuse_live(sequence, budget_ms=30.0, reconstructor=None, first=0, frames=0, s
     indices = list(range(first, len(scans), step))
     if frames:
         indices = indices[:frames]
-    rec = reconstructor if reconstructor is not None else Reconstructor()
     for i in indices:
         pose = poses[i]
         points = read_points(_os.path.join(sequence, "velodyne", scans[i]))

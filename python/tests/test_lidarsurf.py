@@ -416,6 +416,25 @@ def test_fuse_live_yields_what_the_live_view_streams(scan, tmp_path):
     assert sum(len(m.triangles) for m in client.values()) == len(live.triangles) > 1000
     assert [u.scan for u in lidarsurf.fuse_live(str(tmp_path), step=2)] == [0, 2]
     assert [u.scan for u in lidarsurf.fuse_live(str(tmp_path), first=1, frames=1)] == [1]
+    # The same drive as a ROS 1 bag (ROS's own writer) with the poses and their times: the same map.
+    bag, times = tmp_path / "drive.bag", tmp_path / "times.txt"
+    writer = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "io", "kitti_to_ros1_bag.py")
+    if subprocess.run(["/usr/bin/python3", writer, str(tmp_path), str(bag), str(times)], capture_output=True).returncode != 0:
+        pytest.skip("python3-rosbag is absent")
+    try:
+        next(iter(lidarsurf.read_recording(str(bag))))
+    except ValueError:
+        pytest.skip("this build reads no ROS 1 bags")
+    from_bag = lidarsurf.Reconstructor()
+    assert [u.scan for u in lidarsurf.fuse_live(str(bag), budget_ms=0, reconstructor=from_bag, poses=str(tmp_path / "poses.txt"),
+                                                times=str(times))] == [0, 1, 2]
+    a, b = rec.extract_mesh(), from_bag.extract_mesh()
+    np.testing.assert_array_equal(a.vertices, b.vertices)
+    np.testing.assert_array_equal(a.triangles, b.triangles)
+    assert [u.scan for u in lidarsurf.fuse_live(str(bag), step=2, poses=str(tmp_path / "poses.txt"), times=str(times))] == [0, 2]
+    assert [u.scan for u in lidarsurf.fuse_live(str(bag), first=1, frames=1, poses=str(tmp_path / "poses.txt"), times=str(times))] == [1]
+    with pytest.raises(ValueError, match="trajectory"):
+        next(lidarsurf.fuse_live(str(bag)))
 
 
 def test_decode_live_message_reads_the_documented_layout():

@@ -3,6 +3,7 @@
 #include "lidarsurf/io/recording.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "lidarsurf/core/errors.hpp"
@@ -146,6 +147,30 @@ RecordedScan read_recorded_scan(const std::filesystem::path& path, std::size_t i
         if (count == index) return scan;
     throw InvalidArgument(path.string() + ": scan " + std::to_string(index) + " asked for, but the recording holds " + std::to_string(count) +
                           " (numbered from 0)");
+}
+
+RecordedScan read_recorded_scan_at(const std::filesystem::path& path, double seconds, const RecordingOptions& options) {
+    if (!(seconds >= 0) || !std::isfinite(seconds)) throw InvalidArgument(path.string() + ": a time of " + std::to_string(seconds) + " s (it must be >= 0)");
+    auto source = open_recording(path, options);
+    RecordedScan scan, best;
+    std::int64_t first = 0;
+    double best_gap = 0, last = 0;
+    std::size_t count = 0;
+    for (; source->next(scan); ++count) {
+        if (count == 0) first = scan.stamp_ns;
+        last = 1e-9 * static_cast<double>(scan.stamp_ns - first);
+        const double gap = std::abs(last - seconds);
+        if (count == 0 || gap < best_gap) {
+            best = std::move(scan);
+            best_gap = gap;
+        } else if (last > seconds) {
+            break;  // the stamps grow: no nearer scan follows
+        }
+    }
+    if (count == 0) throw InvalidArgument(path.string() + ": the recording holds no scan");
+    if (seconds > last + 1)
+        throw InvalidArgument(path.string() + ": " + std::to_string(seconds) + " s asked for, but the scans span " + std::to_string(last) + " s");
+    return best;
 }
 
 RecordingSummary summarize_recording(const std::filesystem::path& path, const RecordingOptions& options) {

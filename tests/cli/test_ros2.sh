@@ -42,6 +42,13 @@ for opts in "--tile-size 30" "--live"; do
     check "fuse $opts: the MCAP's map is the KITTI layout's, bit for bit" -- cmp -s "$dir/kitti.ply" "$dir/ros2.ply"
 done
 expect 0 "scan 2: .* triangles" -- "$cli" reconstruct "$dir/lz4.mcap" --scan 2 -o "$dir/scan2.ply"
+# --time T: the scan stamped nearest T s after the first (the writer stamps them 0.1 s apart).
+expect 0 "scan 1 \(0.120000 s asked for\)" -- "$cli" reconstruct "$dir/db3bag" --time 0.12 -o "$dir/t1.ply"
+expect 0 "scan 2 \(0.160000 s asked for\)" -- "$cli" reconstruct "$dir/plain.mcap" --time 0.16 -o "$dir/t2.ply"
+check "--time 0.16 is scan 2, bit for bit" -- cmp -s "$dir/scan2.ply" "$dir/t2.ply"
+expect 2 "5.000000 s asked for, but the scans span 0.200000 s" -- "$cli" reconstruct "$dir/zstd.mcap" --time 5 -o "$dir/t5.ply"
+expect 2 "excludes" -- "$cli" reconstruct "$dir/zstd.mcap" --time 0.1 --scan 1 -o "$dir/t5.ply"
+check "nothing written for a time past the scans" -- test ! -e "$dir/t5.ply"
 expect 2 "no topic /nothing" -- "$cli" reconstruct "$dir/zstd.mcap" --topic /nothing -o "$dir/none.ply"
 expect 2 "/chatter carries std_msgs/msg/String" -- "$cli" reconstruct "$dir/db3bag" --topic /chatter -o "$dir/none.ply"
 

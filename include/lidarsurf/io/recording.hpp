@@ -46,6 +46,11 @@ std::unique_ptr<ScanSource> open_recording(const std::filesystem::path& path, co
 /// The scan numbered `index` (from 0) of a recording. Throws InvalidArgument when it has fewer.
 RecordedScan read_recorded_scan(const std::filesystem::path& path, std::size_t index, const RecordingOptions& options = {});
 
+/// The scan whose stamp is nearest `seconds` after the first scan's stamp (the first of two as
+/// near). Throws InvalidArgument when `seconds` is negative or not finite, or lies more than a
+/// second past the last scan.
+RecordedScan read_recorded_scan_at(const std::filesystem::path& path, double seconds, const RecordingOptions& options = {});
+
 struct TopicSummary {
     std::string name;   ///< topic, or "udp:PORT" in a pcap
     std::string type;   ///< message type, or what the port carries
