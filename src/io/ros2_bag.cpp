@@ -1,6 +1,7 @@
 // ROS 2 bags (see recording.hpp): rosbag2's directory (metadata.yaml and its storage files), or
 // one storage file alone; sqlite3 files through Debian's libsqlite3, MCAP files through
-// McapReader. Messages are CDR; sensor_msgs/msg/PointCloud2 is decoded by point_cloud2.
+// McapReader. Messages are CDR: sensor_msgs/msg/PointCloud2 (decoded by point_cloud2), or the
+// Ouster driver's raw packets with its metadata topic (decoded by ouster).
 #include <sqlite3.h>
 
 #include <algorithm>
@@ -10,12 +11,15 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/mcap.hpp"
 #include "lidarsurf/io/point_cloud2.hpp"
+#include "message_reader.hpp"
 #include "recording_sources.hpp"
 
 namespace lidarsurf::detail {
 namespace {
 
 constexpr const char* kPointCloud2 = "sensor_msgs/msg/PointCloud2";
+constexpr const char* kOusterPacket = "ouster_sensor_msgs/msg/PacketMsg";  // ouster-ros's raw packets
+constexpr const char* kString = "std_msgs/msg/String";
 
 std::string trimmed(std::string s) {
     const auto b = s.find_first_not_of(" \t\r");
@@ -192,6 +196,62 @@ std::vector<TopicSummary> mcap_topics(const std::filesystem::path& file) {
     return out;
 }
 
+// The messages of one topic over a bag's storage files, in order.
+class Ros2Messages {
+public:
+    Ros2Messages(const std::vector<std::filesystem::path>& files, std::string topic) : files_(files), topic_(std::move(topic)) {}
+
+    /// The next message's bytes (valid until the next call) and where it is, for messages; false
+    /// at the end.
+    bool next(std::span<const std::uint8_t>& data, std::string& where) {
+        for (;;) {
+            if (mcap_) {
+                McapMessage m;
+                if (!mcap_->next(m)) {
+                    mcap_.reset();
+                    continue;
+                }
+                if (m.channel->topic != topic_) continue;
+                if (m.channel->message_encoding != "cdr")
+                    throw InvalidInput(mcap_->name() + ": topic " + topic_ + " is encoded as " + m.channel->message_encoding + ", not ROS 2's cdr");
+                data = m.data;
+                where = mcap_->name() + ": message " + std::to_string(message_++) + " on " + topic_ + " (record at byte " + std::to_string(m.offset) + ")";
+                return true;
+            }
+            if (db3_) {
+                std::int64_t row = 0;
+                if (!db3_->next(data, row)) {
+                    db3_.reset();
+                    continue;
+                }
+                where = files_[file_ - 1].string() + ": message " + std::to_string(message_++) + " on " + topic_ + " (row " + std::to_string(row) + ")";
+                return true;
+            }
+            if (file_ == files_.size()) return false;
+            const auto& f = files_[file_++];
+            if (is_mcap(f)) {
+                mcap_ = std::make_unique<McapReader>(f);
+            } else {
+                db3_ = std::make_unique<Db3File>(f);
+                db3_->select(topic_);
+            }
+        }
+    }
+
+private:
+    const std::vector<std::filesystem::path>& files_;
+    std::string topic_;
+    std::size_t file_ = 0, message_ = 0;
+    std::unique_ptr<McapReader> mcap_;
+    std::unique_ptr<Db3File> db3_;
+};
+
+// A uint8[] or string message in CDR (ouster_sensor_msgs/msg/PacketMsg, std_msgs/msg/String): its bytes.
+std::span<const std::uint8_t> cdr_sized_bytes(std::span<const std::uint8_t> body, const std::string& where) {
+    MessageReader r(body, where, MessageReader::Encoding::Cdr);
+    return r.bytes(r.scalar<std::uint32_t>());
+}
+
 class Ros2BagSource final : public ScanSource {
 public:
     Ros2BagSource(const std::filesystem::path& path, const RecordingOptions& options) : path_(path), files_(storage_files(path)) {
@@ -203,62 +263,65 @@ public:
                 for (const auto& t : Db3File(f).topics()) topics.push_back({t.name, t.type});
             }
         }
-        topic_ = choose_scan_topic(topics, options.topic, kPointCloud2, "", path_.string());
+        topic_ = choose_scan_topic(topics, options.topic, kPointCloud2, kOusterPacket, path_.string());
+        if (type_of(topics, topic_) == kOusterPacket) sweeps_.emplace(ouster_metadata(topics, options), options.returns);
+        messages_ = std::make_unique<Ros2Messages>(files_, topic_);
     }
 
     bool next(RecordedScan& scan) override {
-        for (;;) {
-            // The scan's stamp is its header's, as in every other recording; the recorder's
-            // receive time is not used.
-            std::span<const std::uint8_t> data;
-            std::string where;
-            if (mcap_) {
-                McapMessage m;
-                if (mcap_->next(m)) {
-                    if (m.channel->topic != topic_) continue;
-                    if (m.channel->message_encoding != "cdr")
-                        throw InvalidInput(mcap_->name() + ": topic " + topic_ + " is encoded as " + m.channel->message_encoding + ", not ROS 2's cdr");
-                    data = m.data;
-                    where = mcap_->name() + ": message " + std::to_string(message_) + " on " + topic_ + " (record at byte " + std::to_string(m.offset) + ")";
-                } else {
-                    mcap_.reset();
-                    continue;
-                }
-            } else if (db3_) {
-                std::int64_t row = 0;
-                if (db3_->next(data, row)) {
-                    where = files_[file_ - 1].string() + ": message " + std::to_string(message_) + " on " + topic_ + " (row " + std::to_string(row) + ")";
-                } else {
-                    db3_.reset();
-                    continue;
-                }
-            } else {
-                if (file_ == files_.size()) return false;
-                const auto& f = files_[file_++];
-                if (is_mcap(f)) {
-                    mcap_ = std::make_unique<McapReader>(f);
-                } else {
-                    db3_ = std::make_unique<Db3File>(f);
-                    db3_->select(topic_);
-                }
-                continue;
+        // The scan's stamp is its header's (or its packets'), as in every other recording; the
+        // recorder's receive time is not used.
+        std::span<const std::uint8_t> data;
+        std::string where;
+        while (messages_->next(data, where)) {
+            if (!sweeps_) {
+                scan = decode_point_cloud2(parse_cdr_point_cloud2(data, where), where);
+                scan.index = scans_++;
+                return true;
             }
-            ++message_;
-            scan = decode_point_cloud2(parse_cdr_point_cloud2(data, where), where);
+            if (sweeps_->add(cdr_sized_bytes(data, where), where)) {
+                scan = sweeps_->take();
+                scan.index = scans_++;
+                return true;
+            }
+        }
+        if (sweeps_ && sweeps_->finish()) {
+            scan = sweeps_->take();
             scan.index = scans_++;
             return true;
         }
+        return false;
     }
 
-    std::string description() const override { return topic_ + " (" + kPointCloud2 + "), ROS 2 bag"; }
+    std::string description() const override {
+        if (!sweeps_) return topic_ + " (" + kPointCloud2 + "), ROS 2 bag";
+        return topic_ + " (" + describe_ouster(sweeps_->metadata()) + " packets), ROS 2 bag";
+    }
 
 private:
+    // The driver's metadata topic: a std_msgs/msg/String beside the packets (/ouster/metadata).
+    OusterMetadata ouster_metadata(const std::vector<TopicType>& topics, const RecordingOptions& options) {
+        if (!options.metadata.empty()) return read_ouster_metadata(options.metadata);
+        const std::string name = topic_.substr(0, topic_.rfind('/')) + "/metadata";
+        if (type_of(topics, name) == kString) {
+            Ros2Messages metadata(files_, name);
+            std::span<const std::uint8_t> data;
+            std::string where;
+            if (metadata.next(data, where)) {
+                auto text = cdr_sized_bytes(data, where);
+                if (!text.empty() && text.back() == 0) text = text.first(text.size() - 1);  // the string's NUL
+                return parse_ouster_metadata(std::string_view(reinterpret_cast<const char*>(text.data()), text.size()), where);
+            }
+        }
+        throw InvalidArgument(path_.string() + ": Ouster packets on " + topic_ + " but no " + name + " topic: give the sensor's metadata JSON with --metadata");
+    }
+
     std::filesystem::path path_;
     std::vector<std::filesystem::path> files_;
     std::string topic_;
-    std::size_t file_ = 0, message_ = 0, scans_ = 0;
-    std::unique_ptr<McapReader> mcap_;
-    std::unique_ptr<Db3File> db3_;
+    std::optional<OusterSweeps> sweeps_;
+    std::unique_ptr<Ros2Messages> messages_;
+    std::size_t scans_ = 0;
 };
 
 }  // namespace

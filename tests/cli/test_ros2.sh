@@ -4,9 +4,11 @@
 # test: one simulated drive as KITTI layout, ROS 1 bag, db3 and MCAP (zstd, lz4, uncompressed
 # chunks, no chunks and no summary with big-endian CDR) gives the same map, bit for bit. Then
 # damaged files: exit 3 naming the file, the byte or message and what is wrong; nothing written.
-# Skipped when the writers' npm packages are absent (scripts/setup.sh installs them).
+# The real Ouster ROS 1 bag of ../shared/data, its packets and metadata written again as ROS 2
+# messages in MCAP, gives the same mesh as the bag (skipped when absent). Skipped when the writers'
+# npm packages are absent (scripts/setup.sh installs them).
 set -u
-cli="$1"
+cli="$1" data="${2:-}"
 here="$(cd "$(dirname "$0")" && pwd)"
 writers="$here/../io/ros2"
 dir=$(mktemp -d)
@@ -105,11 +107,23 @@ expect 3 "text.db3: not a readable ROS 2 sqlite3 bag" -- "$cli" reconstruct "$di
 edit "$dir/db3bag" "$dir/bad_kind" db3-kind
 expect 3 "bad_kind_0.db3|db3bag_0.db3: message 1 on /velodyne_points \(row [0-9]+\): CDR encapsulation kind 2" -- "$cli" fuse "$dir/bad_kind" "${poses[@]}" -o "$out"
 edit "$dir/db3bag" "$dir/bad_short" db3-short
-expect 3 "db3: message 1 on /velodyne_points \(row [0-9]+\): PointCloud2 truncated" -- "$cli" fuse "$dir/bad_short" "${poses[@]}" -o "$out"
+expect 3 "db3: message 1 on /velodyne_points \(row [0-9]+\): message truncated" -- "$cli" fuse "$dir/bad_short" "${poses[@]}" -o "$out"
 mkdir "$dir/listed" && sed 's/db3bag_0.db3/absent.db3/' "$dir/db3bag/metadata.yaml" > "$dir/listed/metadata.yaml"
 expect 4 "absent.db3: no such file \(listed in" -- "$cli" info "$dir/listed"
 mkdir "$dir/zipped" && sed 's/compression_mode: ""/compression_mode: FILE/; s/compression_format: ""/compression_format: zstd/' "$dir/db3bag/metadata.yaml" > "$dir/zipped/metadata.yaml"
 expect 3 "a bag compressed by rosbag2 \(zstd per FILE\)" -- "$cli" info "$dir/zipped"
 check "no output after the failures" -- test ! -e "$out"
+
+# --- The Ouster driver's raw packets in a ROS 2 bag: the real ROS 1 bag's, written again.
+bag="$data/ouster/ouster_ros_512x10_raw.bag"
+if [ -f "$bag" ] && "$cli" info "$bag" >/dev/null 2>&1 && /usr/bin/python3 "$writers/ros1_packets.py" "$bag" "$dir/ouster.msgs" 2>/dev/null; then
+    node "$writers/write_packets.mjs" "$dir/ouster.msgs" "$dir/ouster.mcap"
+    expect 0 "/os_node0/lidar_packets \(Ouster OS-0-128, RNG15_RFL8_NIR8, 128 x 512 packets\), ROS 2 bag" -- "$cli" info "$dir/ouster.mcap"
+    "$cli" reconstruct "$bag" -o "$dir/ouster_ros1.ply" >/dev/null
+    expect 0 "scan 0: .* triangles" -- "$cli" reconstruct "$dir/ouster.mcap" -o "$dir/ouster_ros2.ply"
+    check "the Ouster packets give the same mesh from ROS 1 and ROS 2, bit for bit" -- cmp -s "$dir/ouster_ros1.ply" "$dir/ouster_ros2.ply"
+else
+    echo "skip: the real Ouster bag, python3-rosbag or this build's ROS 1 reader is absent"
+fi
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]
