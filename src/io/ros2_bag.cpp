@@ -113,6 +113,17 @@ public:
         return out;
     }
 
+    /// The topics and their types, without counting their messages.
+    std::vector<TopicType> topic_types() {
+        std::vector<TopicType> out;
+        sqlite3_stmt* s = prepare("SELECT name, type FROM topics ORDER BY id");
+        int rc;
+        while ((rc = sqlite3_step(s)) == SQLITE_ROW) out.push_back({text(s, 0), text(s, 1)});
+        sqlite3_finalize(s);
+        if (rc != SQLITE_DONE) fail("cannot list its topics");
+        return out;
+    }
+
     /// Starts reading the messages of `topic`, in the order they were written.
     void select(const std::string& topic) {
         sqlite3_finalize(rows_);
@@ -260,7 +271,7 @@ public:
             if (is_mcap(f)) {
                 for (auto& t : mcap_topic_types(f)) topics.push_back(std::move(t));
             } else {
-                for (const auto& t : Db3File(f).topics()) topics.push_back({t.name, t.type});
+                for (auto& t : Db3File(f).topic_types()) topics.push_back(std::move(t));
             }
         }
         topic_ = choose_scan_topic(topics, options.topic, kPointCloud2, kOusterPacket, path_.string());
