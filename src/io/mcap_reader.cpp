@@ -242,12 +242,6 @@ bool McapReader::index_stats(std::map<std::uint16_t, McapChannelStats>& stats) {
     std::map<std::uint16_t, McapChannelStats> found;
     bool indexed = true, chunk_pending = false;
     std::uint8_t opcode = 0;
-    const auto add = [&](std::uint16_t channel, std::uint64_t t) {
-        auto& s = found[channel];
-        ++s.messages;
-        s.first_ns = std::min(s.first_ns, t);
-        s.last_ns = std::max(s.last_ns, t);
-    };
     at_ = 8;
     if (std::fseek(file_, 8, SEEK_SET) != 0) throw IoError(name_ + ": cannot seek");
     for (;;) {
@@ -267,7 +261,7 @@ bool McapReader::index_stats(std::map<std::uint16_t, McapChannelStats>& stats) {
             for (std::uint32_t k = 0; k < n / 16; ++k) {
                 const auto t = f.integer<std::uint64_t>();
                 f.integer<std::uint64_t>();  // the message's offset in the chunk
-                add(channel, t);
+                found[channel].add(t);
             }
         } else {
             indexed = indexed && !chunk_pending;
@@ -276,7 +270,7 @@ bool McapReader::index_stats(std::map<std::uint16_t, McapChannelStats>& stats) {
                 Fields f(record_, where);
                 const auto channel = f.integer<std::uint16_t>();
                 f.integer<std::uint32_t>();
-                add(channel, f.integer<std::uint64_t>());
+                found[channel].add(f.integer<std::uint64_t>());
             }
             if (opcode == kDataEnd || opcode == kFooter) break;
         }

@@ -185,12 +185,7 @@ std::vector<TopicSummary> mcap_topics(const std::filesystem::path& file) {
     if (!reader.read_summary_channels() || !reader.index_stats(stats)) {
         stats.clear();
         McapMessage m;
-        while (reader.next(m)) {
-            auto& s = stats[m.channel->id];
-            ++s.messages;
-            s.first_ns = std::min(s.first_ns, m.log_time_ns);
-            s.last_ns = std::max(s.last_ns, m.log_time_ns);
-        }
+        while (reader.next(m)) stats[m.channel->id].add(m.log_time_ns);
     }
     std::vector<TopicSummary> out;
     for (const auto& [id, c] : reader.channels()) {

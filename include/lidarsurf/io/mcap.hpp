@@ -3,6 +3,7 @@
 // order, chunks inflated one at a time (zstd and LZ4 frames through Debian's libzstd and liblz4,
 // their CRC checked), so memory holds one chunk, not the recording. The summary section is not
 // needed, so files without one are read the same way.
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -31,6 +32,11 @@ struct McapMessage {
 struct McapChannelStats {
     std::size_t messages = 0;
     std::uint64_t first_ns = UINT64_MAX, last_ns = 0;  ///< log times
+    void add(std::uint64_t log_time_ns) {
+        ++messages;
+        first_ns = std::min(first_ns, log_time_ns);
+        last_ns = std::max(last_ns, log_time_ns);
+    }
 };
 
 class McapReader {
