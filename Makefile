@@ -44,7 +44,7 @@ test: build
 # world's ring hold-out and the live mesh without budget, whose code the other ring hold-out and
 # live-mesh tests run).
 # ASAN_EXCLUDE= runs everything.
-ASAN_EXCLUDE ?= ^(SeededSurface\.FastPathGivesTheReferenceMesh(InEveryMode|WithDilatedSeeds)|Benchmark\.PaperClaimsHoldOnATownFrame|Pipeline\.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo|Reach/LiveMeshReach\.WhatTheCarLeftIsGoneFromTheLiveMesh/EveryDependency|Tiles\.(ScansThatCannotReachATileAreCountedNotIntegrated|TheTilesMeshIsTheWholeMapsMesh)|cli_recordings|cli_ros2$$|RingHoldout\.OddRingsOfAnExactWorldLieOnTheMeshOfTheEvenRings|LiveMesh\.WithoutThresholdOrBudgetItIsTheExactMesh)
+ASAN_EXCLUDE ?= ^(SeededSurface\.FastPathGivesTheReferenceMesh(InEveryMode|WithDilatedSeeds)|Benchmark\.PaperClaimsHoldOnATownFrame|Pipeline\.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo|Reach/LiveMeshReach\.WhatTheCarLeftIsGoneFromTheLiveMesh/EveryDependency|Tiles\.(ScansThatCannotReachATileAreCountedNotIntegrated|TheTilesMeshIsTheWholeMapsMesh)|cli_recordings|cli_ros2$$|cli_recorded_poses$$|RingHoldout\.OddRingsOfAnExactWorldLieOnTheMeshOfTheEvenRings|LiveMesh\.WithoutThresholdOrBudgetItIsTheExactMesh)
 sanitize: setup
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIDARSURF_SANITIZE=address,undefined -DLIDARSURF_SCALAR=ON -DLIDARSURF_BUILD_BENCH=OFF -DLIDARSURF_BUILD_PYTHON=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
@@ -57,16 +57,18 @@ sanitize: setup
 # not instrumented, and TSan would report every hand-off between its threads as a race).
 # Left out: the slowest, which run the same parallel code on more data (the four largest, 290 s
 # under TSan), the drives that repeat the carving and extraction other tests here run (about 4
-# minutes under TSan), and four whose threads others here run on their own data (the fast path on a
+# minutes under TSan), and six whose threads others here run on their own data (the fast path on a
 # KITTI frame as on the town frame, IMLS on a plane, the simulator through the pipeline's scans,
-# carving through the moving car's: about 60 s under TSan). The TSan build compiles only the test files of these suites
+# carving through the moving car's, every mode's TSDF as the thread-count test's, the bridges' two
+# searches as the flood fill's: about 75 s under TSan). The TSan build compiles only the test files of these suites
 # (tests/CMakeLists.txt, LIDARSURF_TSAN_TEST_SOURCES); scripts/check_test_subset.sh checks that it
 # holds every test the filter selects in the full suite of $(BUILD).
 TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*:LiveFeed.*:LiveServer.*$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo$\
 :FreeSpace.AWalkersPathInFrontOfTheWallIsMostlyCarved:FreeSpace.TheMeshLosesTheTrailAndASingleScanIsUnchanged:FreeSpace.IncrementalMeshesEqualTheOnePassMesh:FreeSpace.ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays$\
 :Pipeline.ASequenceOrientsEachSideTowardTheSensorThatSawIt:Pipeline.IncrementalExtractionGivesTheMeshOfOneExtraction:Pipeline.ATownDriveFusedFrameByFrameGivesTheOnePassMesh$\
-:Pipeline.FastPathGivesTheReferenceMeshOnARealKittiFrame:Imls.ScannedPlaneIsCoveredNearTheSensor:Simulator.ReturnsLieOnTheSceneSurface:FreeSpace.SkippingScansThatReachNothingIsCarvingThem
+:Pipeline.FastPathGivesTheReferenceMeshOnARealKittiFrame:Imls.ScannedPlaneIsCoveredNearTheSensor:Simulator.ReturnsLieOnTheSceneSurface:FreeSpace.SkippingScansThatReachNothingIsCarvingThem$\
+:Pipeline.EveryModeProducesASurfaceNearTheScene:SeededSurface.BridgesAreTheSameInBothSearches
 tsan:
 	@bash scripts/setup.sh tsan
 	bash scripts/build_tbb_tsan.sh $(TSAN_BUILD)/tbb

@@ -130,6 +130,23 @@ RecordingOptions recording_options(const RecordingFlags& o) {
     return r;
 }
 
+void add_pose_options(CLI::App* app, PoseFlags& o) {
+    app->add_option("--pose-topic", o.pose_topic,
+                    "A bag's topic of the sensor's poses (nav_msgs/Odometry, geometry_msgs/PoseStamped or PoseWithCovarianceStamped), "
+                    "chained through /tf_static to the scans' frame (default: /tf)");
+    app->add_option("--fixed-frame", o.fixed_frame, "The world frame of a bag's poses (default: the pose topic's frame; with /tf, odom if "
+                                                    "the tree has it, else map)");
+    app->add_option("--sensor-frame", o.sensor_frame, "The frame of the scans' points in the bag's tf tree (default: their frame_id)");
+}
+
+RecordedPosesOptions recorded_poses_options(const PoseFlags& o) {
+    RecordedPosesOptions r;
+    r.pose_topic = o.pose_topic;
+    r.fixed_frame = o.fixed_frame;
+    r.sensor_frame = o.sensor_frame;
+    return r;
+}
+
 Method resolve_method(const ReconstructOptions& o) {
     Method m;
     m.config = o.config;

@@ -11,6 +11,7 @@
 #include "lidarsurf/baselines/imls.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/io/recorded_poses.hpp"
 #include "lidarsurf/io/recording.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/pipeline.hpp"
@@ -52,6 +53,13 @@ struct RecordingFlags {
 };
 void add_recording_options(CLI::App* app, RecordingFlags& o);
 RecordingOptions recording_options(const RecordingFlags& o);
+
+/// Where a recording's poses come from (`fuse`, `info`): --pose-topic, --fixed-frame, --sensor-frame.
+struct PoseFlags {
+    std::string pose_topic, fixed_frame, sensor_frame;
+};
+void add_pose_options(CLI::App* app, PoseFlags& o);
+RecordedPosesOptions recorded_poses_options(const PoseFlags& o);
 
 /// The method and its settings, validated before any file is read.
 struct Method : MethodConfig {

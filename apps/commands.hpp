@@ -32,7 +32,8 @@ int run_reconstruct(const ReconstructCommandOptions& o);
 struct InfoOptions {
     std::string input;
     RecordingFlags recording;
-    std::string json;
+    PoseFlags recorded_poses;
+    std::string json, save_poses;
 };
 CLI::App* add_info_command(CLI::App& app, InfoOptions& o);
 int run_info(const InfoOptions& o);
@@ -110,6 +111,7 @@ struct FuseOptions {
     TileConfig tiles{0.0};     // tile_size 0: the map whole, in memory
     ReconstructOptions reconstruct;  // the method and its configuration (paper defaults)
     RecordingFlags recording;        // a recording's topic, metadata and returns
+    PoseFlags recorded_poses;        // without --poses: a bag's /tf or pose topic
     std::string times;               // KITTI poses' times.txt, for a recording
     int deskew = 1;                  // de-skew a recording's scans when they have per-point times
 };

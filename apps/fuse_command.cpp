@@ -36,7 +36,8 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
     f->add_option("dirs", o.dirs,
                   "Sequence directory: velodyne/000000.bin, ... with poses.txt (sensor-to-world lidar poses, as simulate "
                   "writes), or KITTI's dataset/sequences/NN (poses from dataset/poses/NN.txt and the sequence's calib.txt), "
-                  "or a recording (.pcap, ROS 1 .bag, ROS 2 bag) with --poses, its sensor's timestamped trajectory. "
+                  "or a recording (.pcap, ROS 1 .bag, ROS 2 bag) with --poses, its sensor's timestamped trajectory (a bag's own "
+                  "/tf or --pose-topic when --poses is not given). "
                   "Several: drives whose poses share one world frame, fused one after the other into one map")
         ->required();
     f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();
@@ -45,6 +46,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
                   "Pose file (KITTI format, one 3x4 sensor-to-world pose a line), e.g. from your odometry; the lidar's "
                   "unless --calib is given");
     add_recording_options(f, o.recording);
+    add_pose_options(f, o.recorded_poses);
     f->add_option("--times", o.times, "A recording's trajectory given as KITTI poses (--poses): their times.txt (seconds, one a line)");
     f->add_option("--deskew", o.deskew, "De-skew a recording's scans with the trajectory, when they have per-point times (0: off)")
         ->capture_default_str();
@@ -97,7 +99,8 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
               "  lidarsurf fuse monday tuesday -o street.ply          (two drives of one street, one world frame)\n"
               "  lidarsurf fuse kitti00 -o kitti00.ply --tile-size 100                (flat memory on a drive of any length)\n"
               "  lidarsurf fuse town -o town.ply --serve 8080 --rate 10          (then open http://127.0.0.1:8080/)\n"
-              "  lidarsurf fuse drive.pcap --poses drive_tum.txt -o drive.ply     (a recording with the sensor's trajectory)");
+              "  lidarsurf fuse drive.pcap --poses drive_tum.txt -o drive.ply     (a recording with the sensor's trajectory)\n"
+              "  lidarsurf fuse drive.bag -o drive.ply --fixed-frame map           (poses from the bag's /tf)");
     return f;
 }
 
@@ -120,22 +123,37 @@ std::string FuseInput::layout() const {
 
 namespace {
 
-// A recording's drive: its scans within the trajectory of --poses (TUM, or KITTI with --times).
+// A recording's drive: its scans within the trajectory of --poses (TUM, or KITTI with --times), or
+// else of the bag's /tf or --pose-topic.
 FuseInput::Drive read_recorded_drive(const FuseOptions& o, const std::string& path, FileRoles& files) {
-    if (o.poses.empty())
-        throw InvalidArgument(path + ": a recording needs the sensor's trajectory to be fused: --poses FILE (TUM: t x y z qx qy qz qw, "
-                              "as odometries such as KISS-ICP write; or KITTI poses with --times times.txt)");
     if (!o.calib.empty()) throw InvalidArgument("--calib converts KITTI's camera poses of a sequence directory, not a recording's trajectory");
+    const auto& rp = o.recorded_poses;
+    const bool from_bag = o.poses.empty();
+    if (!from_bag && !(rp.pose_topic.empty() && rp.fixed_frame.empty() && rp.sensor_frame.empty()))
+        throw InvalidArgument("--poses gives the trajectory: --pose-topic, --fixed-frame and --sensor-frame choose a bag's own instead");
+    if (from_bag && !has_recorded_poses(path))
+        throw InvalidArgument(path + ": a recording needs the sensor's trajectory to be fused, and this one holds no /tf or pose topic: "
+                              "--poses FILE (TUM: t x y z qx qy qz qw, as odometries such as KISS-ICP write; or KITTI poses with "
+                              "--times times.txt)");
     RecordedDriveOptions ro;
     ro.recording = recording_options(o.recording);
     ro.deskew = o.deskew != 0;
-    auto drive = std::make_shared<RecordedDrive>(path, read_trajectory(o.poses, o.times), ro);
+    std::string source = "--poses";
+    Trajectory trajectory;
+    if (from_bag) {
+        RecordedPoses poses = read_recorded_poses(path, recorded_poses_options(rp), ro.recording);
+        source = poses.source + " (" + poses.fixed_frame + " -> " + poses.sensor_frame + ")";
+        trajectory = std::move(poses.trajectory);
+    } else {
+        trajectory = read_trajectory(o.poses, o.times);
+    }
+    auto drive = std::make_shared<RecordedDrive>(path, std::move(trajectory), ro);
     files.input(path);
-    files.input(o.poses);
+    if (!from_bag) files.input(o.poses);
     if (!o.times.empty()) files.input(o.times);
     FuseInput::Drive d{KittiSequence{path}, {}, {}, drive};
-    d.where.poses = o.poses;
-    d.where.layout = "--poses (" + std::to_string(drive->size()) + " of " + std::to_string(drive->recorded()) + " scans within its span" +
+    d.where.poses = from_bag ? path : o.poses;
+    d.where.layout = source + " (" + std::to_string(drive->size()) + " of " + std::to_string(drive->recorded()) + " scans within its span" +
                      (drive->deskews() ? ", de-skewed" : "") + ")";
     for (std::size_t k = 0; k < drive->size(); ++k) d.poses.push_back(drive->pose(k));
     return d;

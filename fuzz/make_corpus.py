@@ -238,4 +238,43 @@ put("fuzz_mcap", "plain.mcap", mcap())
 put("fuzz_mcap", "chunk.mcap", mcap(""))
 put("fuzz_mcap", "zstd.mcap", mcap("zstd", summary=True))
 put("fuzz_mcap", "lz4.mcap", mcap("lz4"))
+# Poses (fuzz_tf.cpp): the first byte picks the encoding (bit 0: CDR) and the message (bits 1-2:
+# TFMessage, Odometry, PoseStamped). A TFMessage with a chain of two links, an Odometry, a PoseStamped.
+
+
+def ros1_header(stamp, frame):
+    return struct.pack("<III", 0, stamp, 0) + ros_string(frame)
+
+
+def cdr_writer():
+    out = bytearray(b"\x00\x01\x00\x00")
+
+    def align(n):
+        while (len(out) - 4) % n:
+            out.append(0)
+
+    def put_(fmt, *v):
+        align(struct.calcsize("<" + fmt[0]))
+        out.extend(struct.pack("<" + fmt, *v))
+
+    def string(s):
+        put_("I", len(s) + 1)
+        out.extend(s.encode() + b"\x00")
+
+    return out, put_, string
+
+
+POSE = (1.0, 2.0, 0.5, 0.0, 0.0, 0.38268343236, 0.92387953251)
+links = [("odom", "base_link", 100), ("base_link", "lidar", 100), ("odom", "base_link", 101)]
+put("fuzz_tf", "tf.ros1", bytes([0]) + struct.pack("<I", len(links)) +
+    b"".join(ros1_header(t, p) + ros_string(c) + struct.pack("<7d", *POSE) for p, c, t in links))
+out, put_, string = cdr_writer()
+put_("I", len(links))
+for p, c, t in links:
+    put_("i", t), put_("I", 0), string(p), string(c)
+    for v in POSE:
+        put_("d", v)
+put("fuzz_tf", "tf.cdr", bytes([1]) + bytes(out))
+put("fuzz_tf", "odometry.ros1", bytes([2]) + ros1_header(100, "odom") + ros_string("base_link") + struct.pack("<7d", *POSE) + bytes(8 * 78))
+put("fuzz_tf", "pose.ros1", bytes([4]) + ros1_header(100, "odom") + struct.pack("<7d", *POSE))
 print("corpus written to", root, file=sys.stderr)

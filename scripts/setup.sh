@@ -25,6 +25,7 @@ PKGS=(
   libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev  # recordings: ROS 2 bags (.db3; MCAP chunks and their CRC)
   lz4                  # tests: LZ4 frames of the MCAP chunks the tests write
   python3-rosbag python3-sensor-msgs  # tests: ROS 1 bags written by ROS's own writer
+  python3-tf2 python3-tf2-msgs python3-nav-msgs python3-geometry-msgs  # tests: poses in bags, checked by tf2's own BufferCore
 )
 # npm fetches three.js for the viewer (below); a machine with Node.js from elsewhere has npm already,
 # and Debian's npm package would conflict with it.

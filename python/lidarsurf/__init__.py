@@ -64,15 +64,13 @@ def fuse_live(sequence, budget_ms=30.0, reconstructor=None, first=0, frames=0, s
     extract_mesh() gives the exact mesh at the end: the triangles `fuse` writes.
 
     `sequence` may be a recording (pcap, ROS 1 bag, ROS 2 bag) with `poses`, the sensor's trajectory
-    (TUM, or KITTI poses with their `times`), as read_recording takes them: its scans within the
-    trajectory's span, de-skewed, each from the sensor's position at its stamp; `first`, `frames`
-    and `step` count those scans.
+    (TUM, or KITTI poses with their `times`), as read_recording takes them; without `poses`, a bag's
+    own /tf (poses="recording"). Its scans within the trajectory's span come de-skewed, each from the
+    sensor's position at its stamp; `first`, `frames` and `step` count those scans.
     """
     rec = reconstructor if reconstructor is not None else Reconstructor()
     if _is_recording(sequence):
-        if poses is None:
-            raise ValueError(f"{sequence}: a recording needs the sensor's trajectory (poses=...)")
-        scans = read_recording(sequence, topic=topic, poses=poses, times=times)
+        scans = read_recording(sequence, topic=topic, poses="recording" if poses is None else poses, times=times)
         last = first + frames * step if frames else None
         for i, (_, points, _, pose) in enumerate(scans):
             if last is not None and i >= last:

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "lidarsurf/io/recorded_drive.hpp"
+#include "lidarsurf/io/recorded_poses.hpp"
 #include "lidarsurf/io/recording.hpp"
 #include "numpy_views.hpp"
 
@@ -20,13 +21,14 @@ namespace {
 class RecordingScans {
 public:
     RecordingScans(const std::string& path, const RecordingOptions& o, const std::optional<std::string>& poses, const std::optional<std::string>& times,
-                   bool deskew) {
+                   bool deskew, const RecordedPosesOptions& recorded) {
         py::gil_scoped_release release;
         if (poses) {
             RecordedDriveOptions d;
             d.recording = o;
             d.deskew = deskew;
-            drive_ = std::make_unique<RecordedDrive>(path, read_trajectory(*poses, times.value_or("")), d);
+            Trajectory trajectory = *poses == "recording" ? read_recorded_poses(path, recorded, o).trajectory : read_trajectory(*poses, times.value_or(""));
+            drive_ = std::make_unique<RecordedDrive>(path, std::move(trajectory), d);
         } else {
             source_ = open_recording(path, o);
         }
@@ -82,20 +84,27 @@ void bind_recording(py::module_& m) {
     m.def(
         "read_recording",
         [](const std::string& path, const std::optional<std::string>& topic, const std::optional<std::string>& poses,
-           const std::optional<std::string>& metadata, const std::optional<std::string>& times, bool deskew, const std::string& returns) {
+           const std::optional<std::string>& metadata, const std::optional<std::string>& times, bool deskew, const std::string& returns,
+           const std::string& pose_topic, const std::string& fixed_frame, const std::string& sensor_frame) {
             RecordingOptions o;
             o.topic = topic.value_or("");
             o.metadata = metadata.value_or("");
             o.returns = parse_ouster_returns(returns);
-            return std::make_unique<RecordingScans>(path, o, poses, times, deskew);
+            RecordedPosesOptions r;
+            r.pose_topic = pose_topic;
+            r.fixed_frame = fixed_frame;
+            r.sensor_frame = sensor_frame;
+            return std::make_unique<RecordingScans>(path, o, poses, times, deskew, r);
         },
         py::arg("path"), py::arg("topic") = py::none(), py::arg("poses") = py::none(), py::arg("metadata") = py::none(),
-        py::arg("times") = py::none(), py::arg("deskew") = true, py::arg("returns") = "first",
+        py::arg("times") = py::none(), py::arg("deskew") = true, py::arg("returns") = "first", py::arg("pose_topic") = "",
+        py::arg("fixed_frame") = "", py::arg("sensor_frame") = "",
         "The scans of a recording (an Ouster .pcap with its metadata JSON beside it or `metadata`, a ROS 1 .bag of\n"
         "PointCloud2 or Ouster packets on `topic`, a ROS 2 bag of PointCloud2: its directory, a .db3 or a .mcap), one at a time, as tuples (stamp_ns, points, times, pose):\n"
         "points (N, 3) float64 in the sensor frame; times (N,) float32 seconds after stamp_ns, or None when the\n"
         "recording has none; pose the 4x4 sensor-to-world matrix at stamp_ns from the trajectory `poses` (TUM, or\n"
-        "KITTI poses with their `times`), or None without one. With `poses`, only the scans within its span come,\n"
+        "KITTI poses with their `times`; \"recording\": the bag's own /tf, or `pose_topic`, from `fixed_frame` to\n"
+        "`sensor_frame`, as `lidarsurf fuse` takes them), or None without one. With `poses`, only the scans within its span come,\n"
         "de-skewed to stamp_ns when they have per-point times (deskew=False: as recorded). ValueError for a\n"
         "malformed recording (naming the packet or message), OSError when it cannot be read.");
 }

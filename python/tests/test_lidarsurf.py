@@ -433,8 +433,22 @@ def test_fuse_live_yields_what_the_live_view_streams(scan, tmp_path):
     np.testing.assert_array_equal(a.triangles, b.triangles)
     assert [u.scan for u in lidarsurf.fuse_live(str(bag), step=2, poses=str(tmp_path / "poses.txt"), times=str(times))] == [0, 2]
     assert [u.scan for u in lidarsurf.fuse_live(str(bag), first=1, frames=1, poses=str(tmp_path / "poses.txt"), times=str(times))] == [1]
-    with pytest.raises(ValueError, match="trajectory"):
+    with pytest.raises(ValueError, match="no /tf, /tf_static or pose topic"):
         next(lidarsurf.fuse_live(str(bag)))
+    # The poses in the bag's own /tf (odom -> base_link, and base_link -> velodyne in /tf_static):
+    # chained, they are poses.txt's.
+    tf_writer = os.path.join(os.path.dirname(writer), "write_tf_bag.py")
+    if subprocess.run(["/usr/bin/python3", tf_writer, str(tmp_path), str(tmp_path)], capture_output=True).returncode != 0:
+        pytest.skip("python3-tf2-msgs or python3-nav-msgs is absent")
+    poses = [pose for (_, _, _, pose) in lidarsurf.read_recording(str(tmp_path / "tf.bag"), poses="recording")]
+    assert len(poses) == 3
+    for x, pose in zip((0.0, 5.0, 10.0), poses):
+        np.testing.assert_allclose(pose, [[1, 0, 0, x], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], atol=1e-9)
+    updates = list(lidarsurf.fuse_live(str(tmp_path / "tf.bag"), budget_ms=0))
+    assert [u.scan for u in updates] == [0, 1, 2]
+    np.testing.assert_allclose([u.pose[0, 3] for u in updates], [0.0, 5.0, 10.0], atol=1e-9)
+    with pytest.raises(ValueError, match="no frame 'nowhere'"):
+        lidarsurf.read_recording(str(tmp_path / "tf.bag"), poses="recording", fixed_frame="nowhere")
 
 
 def test_decode_live_message_reads_the_documented_layout():

@@ -55,6 +55,25 @@ public:
         return s;
     }
 
+    /// std_msgs/Header: ROS 1's has a sequence number and an unsigned second, ROS 2's neither.
+    struct Header {
+        std::int64_t stamp_ns = 0;
+        std::string frame_id;
+    };
+    Header header() {
+        Header h;
+        std::int64_t sec = 0;
+        if (!cdr_) {
+            scalar<std::uint32_t>();  // seq
+            sec = scalar<std::uint32_t>();
+        } else {
+            sec = scalar<std::int32_t>();
+        }
+        h.stamp_ns = sec * 1000000000 + scalar<std::uint32_t>();
+        h.frame_id = string();
+        return h;
+    }
+
 private:
     void need(std::size_t n) const {
         if (at_ > bytes_.size() || n > bytes_.size() - at_)

@@ -14,19 +14,12 @@ namespace {
 constexpr double kMaxPointTime = 3600;  // s from the stamp: a sweep lasts well under a second
 
 // sensor_msgs/PointCloud2 in the order of its .msg file, the same in ROS 1 and ROS 2 but for the
-// header: ROS 1's has a sequence number and an unsigned second.
-PointCloud2Message parse_point_cloud2(detail::MessageReader& r, bool ros1, const std::string& where) {
+// header.
+PointCloud2Message parse_point_cloud2(detail::MessageReader& r, const std::string& where) {
     PointCloud2Message m;
-    std::int64_t sec = 0;
-    if (ros1) {
-        r.scalar<std::uint32_t>();  // header.seq
-        sec = r.scalar<std::uint32_t>();
-    } else {
-        sec = r.scalar<std::int32_t>();
-    }
-    const auto nsec = r.scalar<std::uint32_t>();
-    m.stamp_ns = sec * 1000000000 + nsec;
-    m.frame_id = r.string();
+    auto header = r.header();
+    m.stamp_ns = header.stamp_ns;
+    m.frame_id = std::move(header.frame_id);
     m.height = r.scalar<std::uint32_t>();
     m.width = r.scalar<std::uint32_t>();
     const auto n_fields = r.scalar<std::uint32_t>();
@@ -65,12 +58,12 @@ const PointField2* field_named(const PointCloud2Message& m, std::initializer_lis
 
 PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where) {
     detail::MessageReader r(bytes, where, detail::MessageReader::Encoding::Ros1);
-    return parse_point_cloud2(r, true, where);
+    return parse_point_cloud2(r, where);
 }
 
 PointCloud2Message parse_cdr_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where) {
     detail::MessageReader r(bytes, where, detail::MessageReader::Encoding::Cdr);
-    return parse_point_cloud2(r, false, where);
+    return parse_point_cloud2(r, where);
 }
 
 RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string& where, std::size_t* no_returns) {

@@ -191,8 +191,12 @@ RecordingSummary summarize_recording(const std::filesystem::path& path, const Re
     RecordedScan scan;
     bool times = true;
     while (source->next(scan)) {
-        if (s.scans++ == 0) s.first_ns = scan.stamp_ns;
+        if (s.scans++ == 0) {
+            s.first_ns = scan.stamp_ns;
+            s.frame_id = scan.frame_id;
+        }
         s.last_ns = scan.stamp_ns;
+        s.stamps_ns.push_back(scan.stamp_ns);
         s.points += scan.cloud.points.size();
         if (scan.completeness < 0.999) ++s.partial_scans;
         times = times && !scan.times.empty();

@@ -1,6 +1,7 @@
 #pragma once
 // Internal: the ScanSource of each kind of recording, and the topics of each container.
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "lidarsurf/io/recording.hpp"
@@ -22,6 +23,21 @@ std::string choose_scan_topic(const std::vector<TopicType>& topics, const std::s
 /// The type of `topic` in `topics`, empty when absent.
 std::string type_of(const std::vector<TopicType>& topics, const std::string& topic);
 
+/// One message of a bag, as its container holds it.
+struct RawMessage {
+    std::string topic, type;
+    std::span<const std::uint8_t> data;  ///< valid until the next message is read
+    std::string where;                   ///< the file and the message, for errors
+    bool cdr = false;                    ///< ROS 2's CDR, else ROS 1's serialization
+};
+
+/// The messages of some topics of a bag, in the order the bag holds them.
+class MessageStream {
+public:
+    virtual ~MessageStream() = default;
+    virtual bool next(RawMessage& message) = 0;
+};
+
 std::unique_ptr<ScanSource> open_ouster_pcap(const std::filesystem::path& path, const RecordingOptions& options);
 std::vector<TopicSummary> pcap_topics(const std::filesystem::path& path);
 
@@ -29,10 +45,14 @@ std::vector<TopicSummary> pcap_topics(const std::filesystem::path& path);
 /// throw InvalidInput saying how to build with it.
 std::unique_ptr<ScanSource> open_ros1_bag(const std::filesystem::path& path, const RecordingOptions& options);
 std::vector<TopicSummary> ros1_bag_topics(const std::filesystem::path& path);
+std::vector<TopicType> ros1_bag_topic_types(const std::filesystem::path& path);
+std::unique_ptr<MessageStream> open_ros1_messages(const std::filesystem::path& path, const std::vector<std::string>& topics);
 
 /// ROS 2 bags: a directory with metadata.yaml and its .db3 (sqlite3) or .mcap files, or one such file.
 bool is_ros2_bag(const std::filesystem::path& path);
 std::unique_ptr<ScanSource> open_ros2_bag(const std::filesystem::path& path, const RecordingOptions& options);
 std::vector<TopicSummary> ros2_bag_topics(const std::filesystem::path& path);
+std::vector<TopicType> ros2_bag_topic_types(const std::filesystem::path& path);
+std::unique_ptr<MessageStream> open_ros2_messages(const std::filesystem::path& path, const std::vector<std::string>& topics);
 
 }  // namespace lidarsurf::detail

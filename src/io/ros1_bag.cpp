@@ -1,6 +1,7 @@
 // ROS 1 bags (see recording.hpp), through Debian's librosbag-storage: it reads the bag's chunks
 // (uncompressed, bz2, lz4) and index; the messages' bytes are decoded here.
 #include <algorithm>
+#include <map>
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/point_cloud2.hpp"
@@ -22,6 +23,10 @@ std::unique_ptr<ScanSource> open_ros1_bag(const std::filesystem::path& path, con
 }
 
 std::vector<TopicSummary> ros1_bag_topics(const std::filesystem::path& path) { return open_ros1_bag(path, {}), std::vector<TopicSummary>{}; }
+std::vector<TopicType> ros1_bag_topic_types(const std::filesystem::path& path) { return open_ros1_bag(path, {}), std::vector<TopicType>{}; }
+std::unique_ptr<MessageStream> open_ros1_messages(const std::filesystem::path& path, const std::vector<std::string>&) {
+    return open_ros1_bag(path, {}), nullptr;
+}
 
 #else
 
@@ -144,7 +149,53 @@ private:
     std::size_t message_ = 0, scans_ = 0;
 };
 
+// The messages of some topics, in the bag's time order.
+class Ros1MessageStream final : public MessageStream {
+public:
+    Ros1MessageStream(const std::filesystem::path& path, const std::vector<std::string>& topics) : path_(path) {
+        guarded(path_, [&] {
+            bag_.open(path_.string(), rosbag::bagmode::Read);
+            view_ = std::make_unique<rosbag::View>(bag_, rosbag::TopicQuery(topics));
+            it_ = view_->begin();
+            return 0;
+        });
+    }
+    bool next(RawMessage& m) override {
+        return guarded(path_, [&] {
+            if (it_ == view_->end()) return false;
+            m.topic = it_->getTopic();
+            m.type = it_->getDataType();
+            m.where = path_.string() + ": message " + std::to_string(messages_[m.topic]++) + " on " + m.topic;
+            body_ = message_bytes(*it_);
+            m.data = body_;
+            m.cdr = false;
+            ++it_;
+            return true;
+        });
+    }
+
+private:
+    std::filesystem::path path_;
+    rosbag::Bag bag_;
+    std::unique_ptr<rosbag::View> view_;
+    rosbag::View::iterator it_;
+    std::vector<std::uint8_t> body_;
+    std::map<std::string, std::size_t> messages_;  // read so far, by topic
+};
+
 }  // namespace
+
+std::vector<TopicType> ros1_bag_topic_types(const std::filesystem::path& path) {
+    return guarded(path, [&] {
+        rosbag::Bag bag;
+        bag.open(path.string(), rosbag::bagmode::Read);
+        return topics_of(bag);
+    });
+}
+
+std::unique_ptr<MessageStream> open_ros1_messages(const std::filesystem::path& path, const std::vector<std::string>& topics) {
+    return std::make_unique<Ros1MessageStream>(path, topics);
+}
 
 std::unique_ptr<ScanSource> open_ros1_bag(const std::filesystem::path& path, const RecordingOptions& options) {
     return std::make_unique<Ros1BagSource>(path, options);

@@ -124,22 +124,26 @@ public:
         return out;
     }
 
-    /// Starts reading the messages of `topic`, in the order they were written.
-    void select(const std::string& topic) {
+    /// Starts reading the messages of `topics`, in the order they were written.
+    void select(const std::vector<std::string>& topics) {
         sqlite3_finalize(rows_);
-        rows_ = prepare("SELECT m.data, m.id FROM messages m JOIN topics t ON m.topic_id = t.id WHERE t.name = ?1 ORDER BY m.id");
-        sqlite3_bind_text(rows_, 1, topic.c_str(), static_cast<int>(topic.size()), SQLITE_TRANSIENT);
+        std::string sql = "SELECT m.data, m.id, t.name FROM messages m JOIN topics t ON m.topic_id = t.id WHERE t.name IN (";
+        for (std::size_t i = 0; i < topics.size(); ++i) sql += i ? ",?" : "?";
+        rows_ = prepare((sql + ") ORDER BY m.id").c_str());
+        for (std::size_t i = 0; i < topics.size(); ++i)
+            sqlite3_bind_text(rows_, static_cast<int>(i + 1), topics[i].c_str(), static_cast<int>(topics[i].size()), SQLITE_TRANSIENT);
     }
 
-    /// The next message of the selected topic: its bytes (valid until the next call) and its row
-    /// id; false at the end.
-    bool next(std::span<const std::uint8_t>& data, std::int64_t& row) {
+    /// The next message of the selected topics: its bytes (valid until the next call), its row id
+    /// and its topic; false at the end.
+    bool next(std::span<const std::uint8_t>& data, std::int64_t& row, std::string& topic) {
         const int rc = sqlite3_step(rows_);
         if (rc == SQLITE_DONE) return false;
         if (rc != SQLITE_ROW) fail("cannot read its messages");
         const auto* bytes = static_cast<const std::uint8_t*>(sqlite3_column_blob(rows_, 0));
         data = std::span<const std::uint8_t>(bytes, bytes ? static_cast<std::size_t>(sqlite3_column_bytes(rows_, 0)) : 0);
         row = sqlite3_column_int64(rows_, 1);
+        topic = text(rows_, 2);
         return true;
     }
 
@@ -202,13 +206,13 @@ std::vector<TopicSummary> mcap_topics(const std::filesystem::path& file) {
     return out;
 }
 
-// The messages of one topic over a bag's storage files, in order.
+// The messages of some topics over a bag's storage files, in order.
 class Ros2Messages {
 public:
-    Ros2Messages(const std::vector<std::filesystem::path>& files, std::string topic) : files_(files), topic_(std::move(topic)) {}
+    Ros2Messages(const std::vector<std::filesystem::path>& files, std::vector<std::string> topics) : files_(files), topics_(std::move(topics)) {}
 
     /// The next message's bytes (valid until the next call) and where it is, for messages; false
-    /// at the end.
+    /// at the end. topic() is its topic.
     bool next(std::span<const std::uint8_t>& data, std::string& where) {
         for (;;) {
             if (mcap_) {
@@ -217,20 +221,21 @@ public:
                     mcap_.reset();
                     continue;
                 }
-                if (m.channel->topic != topic_) continue;
+                if (std::find(topics_.begin(), topics_.end(), m.channel->topic) == topics_.end()) continue;
+                topic_ = m.channel->topic;
                 if (m.channel->message_encoding != "cdr")
                     throw InvalidInput(mcap_->name() + ": topic " + topic_ + " is encoded as " + m.channel->message_encoding + ", not ROS 2's cdr");
                 data = m.data;
-                where = mcap_->name() + ": message " + std::to_string(message_++) + " on " + topic_ + " (record at byte " + std::to_string(m.offset) + ")";
+                where = mcap_->name() + ": message " + std::to_string(messages_[topic_]++) + " on " + topic_ + " (record at byte " + std::to_string(m.offset) + ")";
                 return true;
             }
             if (db3_) {
                 std::int64_t row = 0;
-                if (!db3_->next(data, row)) {
+                if (!db3_->next(data, row, topic_)) {
                     db3_.reset();
                     continue;
                 }
-                where = files_[file_ - 1].string() + ": message " + std::to_string(message_++) + " on " + topic_ + " (row " + std::to_string(row) + ")";
+                where = files_[file_ - 1].string() + ": message " + std::to_string(messages_[topic_]++) + " on " + topic_ + " (row " + std::to_string(row) + ")";
                 return true;
             }
             if (file_ == files_.size()) return false;
@@ -239,17 +244,49 @@ public:
                 mcap_ = std::make_unique<McapReader>(f);
             } else {
                 db3_ = std::make_unique<Db3File>(f);
-                db3_->select(topic_);
+                db3_->select(topics_);
             }
         }
     }
+    const std::string& topic() const { return topic_; }
 
 private:
     const std::vector<std::filesystem::path>& files_;
+    std::vector<std::string> topics_;
     std::string topic_;
-    std::size_t file_ = 0, message_ = 0;
+    std::size_t file_ = 0;
+    std::map<std::string, std::size_t> messages_;  // read so far, by topic
     std::unique_ptr<McapReader> mcap_;
     std::unique_ptr<Db3File> db3_;
+};
+
+// The topics and types over a bag's storage files.
+std::vector<TopicType> topic_types(const std::vector<std::filesystem::path>& files) {
+    std::vector<TopicType> topics;
+    for (const auto& f : files) {
+        for (auto& t : is_mcap(f) ? mcap_topic_types(f) : Db3File(f).topic_types())
+            if (type_of(topics, t.name).empty()) topics.push_back(std::move(t));
+    }
+    return topics;
+}
+
+// The messages of some topics, with their types.
+class Ros2MessageStream final : public MessageStream {
+public:
+    Ros2MessageStream(const std::filesystem::path& path, const std::vector<std::string>& topics)
+        : files_(storage_files(path)), types_(topic_types(files_)), messages_(files_, topics) {}
+    bool next(RawMessage& m) override {
+        if (!messages_.next(m.data, m.where)) return false;
+        m.topic = messages_.topic();
+        m.type = type_of(types_, m.topic);
+        m.cdr = true;
+        return true;
+    }
+
+private:
+    std::vector<std::filesystem::path> files_;
+    std::vector<TopicType> types_;
+    Ros2Messages messages_;
 };
 
 // A uint8[] or string message in CDR (ouster_sensor_msgs/msg/PacketMsg, std_msgs/msg/String): its bytes.
@@ -261,17 +298,10 @@ std::span<const std::uint8_t> cdr_sized_bytes(std::span<const std::uint8_t> body
 class Ros2BagSource final : public ScanSource {
 public:
     Ros2BagSource(const std::filesystem::path& path, const RecordingOptions& options) : path_(path), files_(storage_files(path)) {
-        std::vector<TopicType> topics;
-        for (const auto& f : files_) {
-            if (is_mcap(f)) {
-                for (auto& t : mcap_topic_types(f)) topics.push_back(std::move(t));
-            } else {
-                for (auto& t : Db3File(f).topic_types()) topics.push_back(std::move(t));
-            }
-        }
+        const auto topics = topic_types(files_);
         topic_ = choose_scan_topic(topics, options.topic, kPointCloud2, kOusterPacket, path_.string());
         if (type_of(topics, topic_) == kOusterPacket) sweeps_.emplace(ouster_metadata(topics, options), options.returns);
-        messages_ = std::make_unique<Ros2Messages>(files_, topic_);
+        messages_ = std::make_unique<Ros2Messages>(files_, std::vector<std::string>{topic_});
     }
 
     bool next(RecordedScan& scan) override {
@@ -310,7 +340,7 @@ private:
         if (!options.metadata.empty()) return read_ouster_metadata(options.metadata);
         const std::string name = topic_.substr(0, topic_.rfind('/')) + "/metadata";
         if (type_of(topics, name) == kString) {
-            Ros2Messages metadata(files_, name);
+            Ros2Messages metadata(files_, {name});
             std::span<const std::uint8_t> data;
             std::string where;
             if (metadata.next(data, where)) {
@@ -341,6 +371,12 @@ bool is_ros2_bag(const std::filesystem::path& path) {
 
 std::unique_ptr<ScanSource> open_ros2_bag(const std::filesystem::path& path, const RecordingOptions& options) {
     return std::make_unique<Ros2BagSource>(path, options);
+}
+
+std::vector<TopicType> ros2_bag_topic_types(const std::filesystem::path& path) { return topic_types(storage_files(path)); }
+
+std::unique_ptr<MessageStream> open_ros2_messages(const std::filesystem::path& path, const std::vector<std::string>& topics) {
+    return std::make_unique<Ros2MessageStream>(path, topics);
 }
 
 std::vector<TopicSummary> ros2_bag_topics(const std::filesystem::path& path) {

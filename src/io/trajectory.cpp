@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "byte_reader.hpp"
 #include "lidarsurf/core/errors.hpp"
@@ -89,6 +90,22 @@ Trajectory parse_tum_trajectory(std::string_view data, const std::string& name) 
     }
     if (stamps.empty()) throw FormatError(name + ": no pose in the trajectory");
     return Trajectory(std::move(stamps), std::move(poses));
+}
+
+std::string format_tum_trajectory(const Trajectory& trajectory) {
+    std::string out = "# t x y z qx qy qz qw\n";
+    char line[256];
+    for (std::size_t i = 0; i < trajectory.size(); ++i) {
+        const std::int64_t t = trajectory.stamps_ns()[i];
+        const auto& p = trajectory.poses()[i];
+        const Eigen::Quaterniond q(p.linear());
+        const auto a = static_cast<unsigned long long>(t < 0 ? -t : t);
+        std::snprintf(line, sizeof line, "%s%llu.%09llu %.12f %.12f %.12f %.12f %.12f %.12f %.12f\n", t < 0 ? "-" : "", a / 1000000000ull,
+                      a % 1000000000ull, p.translation().x(), p.translation().y(), p.translation().z(), q.x(), q.y(),
+                      q.z(), q.w());
+        out += line;
+    }
+    return out;
 }
 
 Trajectory read_tum_trajectory(const std::filesystem::path& path) { return parse_tum_trajectory(detail::read_file(path.string()), path.string()); }

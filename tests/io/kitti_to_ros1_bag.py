@@ -15,18 +15,23 @@ from sensor_msgs.msg import PointCloud2, PointField
 from std_msgs.msg import Header
 
 
-def main():
-    drive, bag_path, times_path = sys.argv[1:4]
-    compression = sys.argv[4] if len(sys.argv) > 4 else "none"
+def cloud_messages(drive):
+    """(stamp, PointCloud2) of each scan of the drive, stamped 100 s, 100.1 s, ..."""
     scans = sorted(f for f in os.listdir(os.path.join(drive, "velodyne")) if f.endswith(".bin"))
     fields = [PointField("x", 0, PointField.FLOAT32, 1), PointField("y", 4, PointField.FLOAT32, 1),
               PointField("z", 8, PointField.FLOAT32, 1), PointField("intensity", 12, PointField.FLOAT32, 1)]
+    for k, name in enumerate(scans):
+        data = np.fromfile(os.path.join(drive, "velodyne", name), dtype="<f4")
+        stamp = rospy.Time(100 + k // 10, (k % 10) * 100000000)
+        yield stamp, PointCloud2(header=Header(frame_id="velodyne", stamp=stamp), height=1, width=data.size // 4, fields=fields,
+                                 is_bigendian=False, point_step=16, row_step=16 * (data.size // 4), data=data.tobytes(), is_dense=False)
+
+
+def main():
+    drive, bag_path, times_path = sys.argv[1:4]
+    compression = sys.argv[4] if len(sys.argv) > 4 else "none"
     with rosbag.Bag(bag_path, "w", compression=compression) as bag, open(times_path, "w") as times:
-        for k, name in enumerate(scans):
-            data = np.fromfile(os.path.join(drive, "velodyne", name), dtype="<f4")
-            stamp = rospy.Time(100 + k // 10, (k % 10) * 100000000)
-            msg = PointCloud2(header=Header(frame_id="velodyne", stamp=stamp), height=1, width=data.size // 4, fields=fields,
-                              is_bigendian=False, point_step=16, row_step=16 * (data.size // 4), data=data.tobytes(), is_dense=False)
+        for k, (stamp, msg) in enumerate(cloud_messages(drive)):
             bag.write("/velodyne_points", msg, stamp)
             times.write("%d.%d\n" % (100 + k // 10, k % 10))
 

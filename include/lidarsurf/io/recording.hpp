@@ -66,6 +66,8 @@ struct RecordingSummary {
     std::size_t points = 0;
     std::size_t partial_scans = 0;      ///< scans with less than a whole revolution
     std::int64_t first_ns = 0, last_ns = 0;  ///< the scans' stamps
+    std::vector<std::int64_t> stamps_ns;     ///< each scan's
+    std::string frame_id;                    ///< the first scan's
     bool per_point_times = false;
 };
 

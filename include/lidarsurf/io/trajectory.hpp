@@ -25,6 +25,8 @@ public:
     /// The pose at `t_ns`; nullopt outside [first_ns, last_ns] (never extrapolated). At a stamp
     /// of the trajectory, its pose as given, bit for bit.
     std::optional<Eigen::Isometry3d> at(std::int64_t t_ns) const;
+    const std::vector<std::int64_t>& stamps_ns() const { return stamps_; }
+    const std::vector<Eigen::Isometry3d>& poses() const { return poses_; }
 
 private:
     std::vector<std::int64_t> stamps_;
@@ -38,6 +40,9 @@ private:
 /// unit length, or a time not after the previous line's.
 Trajectory read_tum_trajectory(const std::filesystem::path& path);
 Trajectory parse_tum_trajectory(std::string_view data, const std::string& name);
+/// The trajectory as a TUM file's text: seconds with 9 decimals (exact to the ns), positions and
+/// quaternions to 1e-12.
+std::string format_tum_trajectory(const Trajectory& trajectory);
 /// KITTI poses (12 numbers a line) with their times.txt (seconds, one a line).
 Trajectory read_kitti_trajectory(const std::filesystem::path& poses, const std::filesystem::path& times);
 /// A trajectory file by its content: 8 numbers a line is TUM; 12 is KITTI, which needs `times`.

@@ -3,7 +3,7 @@
 // @foxglove/cdr, in MCAP files written by @mcap/core. One message every 0.1 s from 100 s, as
 // kitti_to_ros1_bag.py does, so that every recording of the drive gives the same map.
 //
-// Usage: node write_ros2.mjs DRIVE_DIR OUT_DIR
+// Usage: node write_ros2.mjs DRIVE_DIR OUT_DIR [TRANSFORMS_JSON]
 // Writes in OUT_DIR:
 //   zstd.mcap   chunks compressed with zstd (@foxglove/wasm-zstd), with the summary section
 //   lz4.mcap    small chunks compressed as LZ4 frames (Debian's lz4), with the summary section
@@ -11,6 +11,9 @@
 //   chunked.mcap  uncompressed chunks, with the summary section
 //   messages.cdr  the little-endian CDR messages, each as uint64 stamp_ns, uint32 size, bytes:
 //                 write_db3.py puts them in a rosbag2 sqlite3 bag
+//   tf.mcap     with TRANSFORMS_JSON (write_tf_bag.py's): the scans with /tf_static, /tf
+//               (tf2_msgs/msg/TFMessage), /odom (nav_msgs/msg/Odometry, big-endian CDR) and /pose
+//               (geometry_msgs/msg/PoseStamped), the transforms write_tf_bag.py puts in its ROS 1 bag
 import { readdirSync, readFileSync, openSync, writeSync, closeSync } from "node:fs";
 import { join } from "node:path";
 import { spawnSync } from "node:child_process";
@@ -18,7 +21,7 @@ import { CdrWriter, EncapsulationKind } from "@foxglove/cdr";
 import { McapWriter } from "@mcap/core";
 import * as zstd from "@foxglove/wasm-zstd";
 
-const [drive, out] = process.argv.slice(2);
+const [drive, out, transformsPath] = process.argv.slice(2);
 const scans = readdirSync(join(drive, "velodyne")).filter((f) => f.endsWith(".bin")).sort();
 const FLOAT32 = 7;
 const fields = [["x", 0], ["y", 4], ["z", 8], ["intensity", 12]];
@@ -78,7 +81,72 @@ async function writeMcap(path, kind, options) {
   file.close();
 }
 
+// The messages of poses, in the field order of their .msg files.
+function header(w, e) {
+  w.int32(Number(BigInt(e.stamp_ns) / 1000000000n)).uint32(Number(BigInt(e.stamp_ns) % 1000000000n)).string(e.parent);
+}
+function pose(w, e) {
+  for (const v of e.t) w.float64(v);
+  for (const v of e.q) w.float64(v);
+}
+function tfMessage(entries) {
+  const w = new CdrWriter({ kind: EncapsulationKind.CDR_LE });
+  w.sequenceLength(entries.length);
+  for (const e of entries) {
+    header(w, e);
+    w.string(e.child);
+    pose(w, e);
+  }
+  return w.data;
+}
+function odometry(e) {
+  const w = new CdrWriter({ kind: EncapsulationKind.CDR_BE });
+  header(w, e);
+  w.string(e.child);
+  pose(w, e);
+  for (let i = 0; i < 36; ++i) w.float64(i % 7 === 0 ? 0.01 : 0);  // pose covariance
+  for (let i = 0; i < 6; ++i) w.float64(0);                          // twist
+  for (let i = 0; i < 36; ++i) w.float64(0);
+  return w.data;
+}
+function poseStamped(e) {
+  const w = new CdrWriter({ kind: EncapsulationKind.CDR_LE });
+  header(w, e);
+  pose(w, e);
+  return w.data;
+}
+
+async function writeTfMcap(path, transforms) {
+  const file = new FileWritable(path);
+  const writer = new McapWriter({ writable: file, compressChunk: (d) => ({ compression: "zstd", compressedData: zstd.compress(d) }) });
+  await writer.start({ profile: "ros2", library: "lidarsurf tests (@mcap/core)" });
+  const channel = async (topic, type) => {
+    const schema = await writer.registerSchema({ name: type, encoding: "ros2msg", data: new TextEncoder().encode("# (definition omitted)") });
+    return writer.registerChannel({ topic, schemaId: schema, messageEncoding: "cdr", metadata: new Map() });
+  };
+  const messages = [];
+  const tf = await channel("/tf", "tf2_msgs/msg/TFMessage"), tfStatic = await channel("/tf_static", "tf2_msgs/msg/TFMessage");
+  const odom = await channel("/odom", "nav_msgs/msg/Odometry"), poses = await channel("/pose", "geometry_msgs/msg/PoseStamped");
+  const clouds = await channel("/velodyne_points", "sensor_msgs/msg/PointCloud2");
+  messages.push([BigInt(transforms.static[0].stamp_ns), tfStatic, tfMessage(transforms.static)]);
+  for (const e of transforms.tf) messages.push([BigInt(e.stamp_ns), tf, tfMessage([e])]);
+  for (const e of transforms.odom) messages.push([BigInt(e.stamp_ns), odom, odometry(e)]);
+  for (const e of transforms.pose) messages.push([BigInt(e.stamp_ns), poses, poseStamped(e)]);
+  for (let k = 0; k < scans.length; ++k) {
+    const raw = readFileSync(join(drive, "velodyne", scans[k]));
+    const sec = 100 + Math.floor(k / 10), nanosec = (k % 10) * 100000000;
+    const data = pointCloud2(new Uint8Array(raw.buffer, raw.byteOffset, raw.byteLength), sec, nanosec, EncapsulationKind.CDR_LE);
+    messages.push([BigInt(sec) * 1000000000n + BigInt(nanosec), clouds, data]);
+  }
+  messages.sort((a, b) => (a[0] < b[0] ? -1 : a[0] > b[0] ? 1 : 0));
+  for (const [k, [stamp, channelId, data]] of messages.entries())
+    await writer.addMessage({ channelId, sequence: k, logTime: stamp, publishTime: stamp, data });
+  await writer.end();
+  file.close();
+}
+
 await zstd.isLoaded;
+if (transformsPath) await writeTfMcap(join(out, "tf.mcap"), JSON.parse(readFileSync(transformsPath, "utf8")));
 await writeMcap(join(out, "zstd.mcap"), EncapsulationKind.CDR_LE, { compressChunk: (d) => ({ compression: "zstd", compressedData: zstd.compress(d) }) });
 await writeMcap(join(out, "lz4.mcap"), EncapsulationKind.CDR_LE, { chunkSize: 256 * 1024, compressChunk: lz4Frame });
 await writeMcap(join(out, "plain.mcap"), EncapsulationKind.CDR_BE, {
