@@ -113,7 +113,17 @@ RecordedPoses read_recorded_poses(const std::filesystem::path& path, const Recor
         scans_frame = first.frame_id;
     }
     const std::string sensor = options.sensor_frame.empty() ? scans_frame : options.sensor_frame;
-    return recorded_poses(read_transform_tree(path, options.pose_topic, sensor), options, scans_frame, path.string());
+    const TransformTree tree = read_transform_tree(path, options.pose_topic, sensor);
+    const auto links = tree.links();
+    if (options.pose_topic.empty() && std::none_of(links.begin(), links.end(), [](const FrameLink& l) { return !l.is_static; })) {
+        // Nothing moves in /tf: name the pose topics there are.
+        std::string pose_topics;
+        for (const auto& t : topic_types(path))
+            if (detail::is_pose_type(t.type)) pose_topics += (pose_topics.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
+        if (!pose_topics.empty())
+            throw InvalidArgument(path.string() + ": no moving link in /tf: name one of its pose topics with --pose-topic: " + pose_topics);
+    }
+    return recorded_poses(tree, options, scans_frame, path.string());
 }
 
 }  // namespace lidarsurf

@@ -37,6 +37,8 @@ expect 3 "unlinked.bag: the scans' frame 'velodyne' is not linked in the tf tree
 expect 3 "static_only.bag: the transform from 'odom' to 'velodyne' never changes" -- "$cli" fuse "$dir/bad/static_only.bag" -o "$out"
 expect 3 "truncated.bag: message 2 on /tf: message truncated" -- "$cli" info "$dir/bad/truncated.bag" --save-poses "$dir/poses.txt"
 expect 0 "poses for fuse: none from the recording \(.*never changes" -- "$cli" info "$dir/bad/static_only.bag"
+expect 2 "odom_only.bag: no moving link in /tf: name one of its pose topics with --pose-topic: /odometry \(nav_msgs/Odometry\)" -- "$cli" fuse "$dir/bad/odom_only.bag" -o "$out"
+expect 0 "poses for fuse: /odometry from odom to velodyne, 2 poses" -- "$cli" info "$dir/bad/odom_only.bag" --pose-topic /odometry
 check "nothing written after the failures" -- test ! -e "$out" -a ! -e "$dir/poses.txt"
 fi
 if [ "$part" = readers ]; then

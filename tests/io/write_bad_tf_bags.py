@@ -8,6 +8,7 @@ the bad-input tests of poses read from recordings: two scans of 100 points in fr
   truncated     /tf odom -> base_link, then a TFMessage cut short
   unlinked      /tf odom -> base_link, and no /tf_static (velodyne is not in the tree)
   static_only   /tf_static odom -> base_link as well (nothing moves)
+  odom_only     no /tf: nav_msgs/Odometry of base_link in odom on /odometry
 
 Usage: write_bad_tf_bags.py OUT_DIR"""
 import math
@@ -17,6 +18,7 @@ import sys
 import rosbag
 import rospy
 from geometry_msgs.msg import TransformStamped
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2, PointField
 from std_msgs.msg import Header
 from tf2_msgs.msg import TFMessage
@@ -49,6 +51,7 @@ def main():
         "truncated": [("odom", "base_link")],
         "unlinked": [("odom", "base_link")],
         "static_only": [],
+        "odom_only": [],
     }
     for case, links in cases.items():
         with rosbag.Bag(os.path.join(out, case + ".bag"), "w") as bag:
@@ -64,6 +67,12 @@ def main():
                 if tfs:
                     bag.write("/tf", TFMessage(tfs), t)
                 bag.write("/velodyne_points", cloud(ns), t)
+            if case == "odom_only":
+                for k, ns in enumerate(stamps):
+                    m = Odometry()
+                    m.header.stamp, m.header.frame_id, m.child_frame_id = rospy.Time(ns // 10**9, ns % 10**9), "odom", "base_link"
+                    m.pose.pose.position.x, m.pose.pose.orientation.w = float(k), 1.0
+                    bag.write("/odometry", m, m.header.stamp)
             if case == "truncated":
                 good = TFMessage([transform(stamps[1], "odom", "base_link")])
                 import io
