@@ -32,8 +32,11 @@ bool has_recorded_poses(const std::filesystem::path& path) {
     return std::any_of(topics.begin(), topics.end(), [](const auto& t) { return detail::is_tf_type(t.type) || detail::is_pose_type(t.type); });
 }
 
-TransformTree read_transform_tree(const std::filesystem::path& path, const std::string& pose_topic, const std::string& pose_child) {
-    const auto types = topic_types(path);
+namespace {
+
+// read_transform_tree on the bag's topics and types, listed once by the caller.
+TransformTree transform_tree(const std::filesystem::path& path, const std::vector<detail::TopicType>& types, const std::string& pose_topic,
+                             const std::string& pose_child) {
     const std::string pose_type = pose_topic.empty() ? "" : detail::ros1_type_name(detail::type_of(types, pose_topic));
     if (!pose_topic.empty()) {
         if (pose_type.empty()) throw InvalidArgument(path.string() + ": no topic " + pose_topic);
@@ -66,6 +69,12 @@ TransformTree read_transform_tree(const std::filesystem::path& path, const std::
             tree.add(t.parent, t.child, t.stamp_ns, t.translation, t.rotation, is_static, m.where);
     }
     return tree;
+}
+
+}  // namespace
+
+TransformTree read_transform_tree(const std::filesystem::path& path, const std::string& pose_topic, const std::string& pose_child) {
+    return transform_tree(path, topic_types(path), pose_topic, pose_child);
 }
 
 RecordedPoses recorded_poses(const TransformTree& tree, const RecordedPosesOptions& options, const std::string& scans_frame,
@@ -113,12 +122,13 @@ RecordedPoses read_recorded_poses(const std::filesystem::path& path, const Recor
         scans_frame = first.frame_id;
     }
     const std::string sensor = options.sensor_frame.empty() ? scans_frame : options.sensor_frame;
-    const TransformTree tree = read_transform_tree(path, options.pose_topic, sensor);
+    const auto types = topic_types(path);
+    const TransformTree tree = transform_tree(path, types, options.pose_topic, sensor);
     const auto links = tree.links();
     if (options.pose_topic.empty() && std::none_of(links.begin(), links.end(), [](const FrameLink& l) { return !l.is_static; })) {
         // Nothing moves in /tf: name the pose topics there are.
         std::string pose_topics;
-        for (const auto& t : topic_types(path))
+        for (const auto& t : types)
             if (detail::is_pose_type(t.type)) pose_topics += (pose_topics.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
         if (!pose_topics.empty())
             throw InvalidArgument(path.string() + ": no moving link in /tf: name one of its pose topics with --pose-topic: " + pose_topics);
