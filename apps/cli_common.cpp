@@ -118,8 +118,10 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
 
 void add_recording_options(CLI::App* app, RecordingFlags& o) {
     app->add_option("--topic", o.topic, "A bag's topic of the scans (default: its only PointCloud2 topic, else its Ouster lidar packets)");
-    app->add_option("--metadata", o.metadata, "An Ouster sensor's metadata JSON (default: beside the pcap as X.json, or the bag's metadata topic)");
-    app->add_option("--returns", o.returns, "Ouster dual-return profiles: first | both")->capture_default_str();
+    app->add_option("--metadata", o.metadata, "An Ouster sensor's metadata JSON or a Velodyne calibration YAML (the ROS driver's) (default: "
+                                              "beside the pcap as X.json or X.yaml, or the bag's metadata topic; a VLP-16, VLP-32C or "
+                                              "HDL-32E needs none)");
+    app->add_option("--returns", o.returns, "Dual returns (Ouster dual profiles, Velodyne dual mode): first | both")->capture_default_str();
 }
 
 RecordingOptions recording_options(const RecordingFlags& o) {

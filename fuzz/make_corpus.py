@@ -124,10 +124,10 @@ def ouster_packet(profile, px, frame, first):
     return bytes(b)
 
 
-def pcap_of(datagrams):
+def pcap_of(datagrams, port=7502):
     out = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)
     for n, payload in enumerate(datagrams):
-        udp = struct.pack(">HHHH", 7245, 7502, 8 + len(payload), 0) + payload
+        udp = struct.pack(">HHHH", 7245, port, 8 + len(payload), 0) + payload
         for off in range(0, len(udp), 1480):
             part = udp[off:off + 1480]
             more = 0x2000 if off + len(part) < len(udp) else 0
@@ -141,6 +141,29 @@ def pcap_of(datagrams):
 for i, (profile, px) in enumerate(OUSTER):
     packets = [ouster_packet(profile, px, 7, first) for first in range(0, 64, 16)] + [ouster_packet(profile, px, 8, 0)]
     put("fuzz_ouster_pcap", profile.lower() + ".pcap", bytes([i]) + pcap_of(packets))
+
+# Velodyne pcaps (fuzz_velodyne_pcap.cpp: the first byte picks the model, 0x08 both returns, 0x40
+# a calibration YAML): 1206-byte data packets to port 2368 crossing the azimuth's wrap.
+
+
+def velodyne_packet(first_azimuth, step, stamp_us, product, mode=0x37, dual=False, banks=1):
+    b = bytearray(1206)
+    for blk in range(12):
+        firing = blk // (2 if dual else 1) // banks
+        flag = 0xDDFF if banks == 2 and blk % 2 else 0xEEFF
+        struct.pack_into("<HH", b, 100 * blk, flag, (first_azimuth + step * firing) % 36000)
+        for j in range(32):
+            struct.pack_into("<HB", b, 100 * blk + 4 + 3 * j, 0 if (blk + j) % 7 == 3 else 2500 + 13 * j + blk, 40)
+    struct.pack_into("<IBB", b, 1200, stamp_us, mode, product)
+    return bytes(b)
+
+
+put("fuzz_velodyne_pcap", "vlp16.pcap", bytes([0]) + pcap_of([velodyne_packet(35760 + 240 * k, 20, 800000000 + 1327 * k, 0x22) for k in range(3)], 2368))
+put("fuzz_velodyne_pcap", "vlp16_dual.pcap", bytes([0x08]) + pcap_of([velodyne_packet(35880 + 120 * k, 20, 1000 + 664 * k, 0x22, 0x39, True) for k in range(3)], 2368))
+put("fuzz_velodyne_pcap", "hdl32e.pcap", bytes([3]) + pcap_of([velodyne_packet(35800 + 192 * k, 16, 5000 + 553 * k, 0x21) for k in range(3)], 2368))
+put("fuzz_velodyne_pcap", "hdl64e.pcap", bytes([4]) + pcap_of([velodyne_packet(35900 + 102 * k, 17, 7000 + 290 * k, 0x41, 0x54, False, 2) for k in range(3)], 2368))
+put("fuzz_velodyne_pcap", "calibration.yaml", bytes([0x40]) + b"distance_resolution: 0.002\nlasers:\n- {laser_id: 0, vert_correction: -0.1, rot_correction: 0.02}\n"
+    b"- laser_id: 1\n  vert_correction: 0.1\n  two_pt_correction_available: true\n  dist_correction_x: 0.03\nnum_lasers: 2\n")
 
 # sensor_msgs/PointCloud2, ROS 1 serialization: float32 with a uint32 time and padding; float64
 # big endian; an organized 2 x 3 cloud with a NaN.

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Read speed of recordings (docs/inputs.md, "Read speed"): writes 30 s of an Ouster pcap (the
-OS-2-128 sweep of ../shared/data repeated with new frame ids), of a ROS 1 bag of HDL-64E-sized
+OS-2-128 sweep of ../shared/data repeated with new frame ids), of a Velodyne HDL-64E pcap (data
+packets written from the manual's layout, with a calibration of ../shared/data), of a ROS 1 bag of HDL-64E-sized
 PointCloud2 messages (ROS's own writer), and of the same messages in CDR as a ROS 2 sqlite3 bag and
 as an MCAP file of zstd chunks (Debian's zstd), then times `lidarsurf info` on each (median of 3).
 
@@ -38,6 +39,31 @@ def long_pcap(path, scans):
                 t = 1700000000 * 10**6 + k * 100000
                 f.write(struct.pack("<IIII", t // 10**6, t % 10**6, len(r), len(r)) + bytes(r))
     shutil.copy(os.path.join(SHARED, OUSTER + ".json"), path[:-5] + ".json")
+
+
+def long_velodyne_pcap(path, scans):
+    """An HDL-64E at 10 Hz: 6 firings a packet (an upper and a lower block each) 0.17 degree apart,
+    353 packets a revolution, to UDP 2368; its S3 calibration beside the pcap."""
+    rng = np.random.default_rng(2)
+    revolution = []
+    for k in range(353):
+        b = bytearray(1206)
+        for blk in range(12):
+            struct.pack_into("<HH", b, 100 * blk, 0xDDFF if blk % 2 else 0xEEFF, (17 * (6 * k + blk // 2)) % 36000)
+            struct.pack_into("<" + "HB" * 32, b, 100 * blk + 4, *[v for r in rng.integers(1500, 30000, 32) for v in (int(r), 60)])
+        revolution.append(b)
+    header = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)
+    with open(path, "wb") as f:
+        f.write(header)
+        for s in range(scans):
+            for k, b in enumerate(revolution):
+                t = 1700000000 * 10**6 + s * 100000 + k * 283
+                struct.pack_into("<I", b, 1200, t % 3600000000)
+                udp = struct.pack(">HHHH", 2369, 2368, 8 + len(b), 0) + b
+                ip = struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(udp), k, 0, 64, 17, 0, bytes([192, 168, 1, 201]), bytes([192, 168, 1, 77]))
+                frame = b"\xff" * 6 + b"\x60\x76\x88\x00\x00\x01\x08\x00" + ip + udp
+                f.write(struct.pack("<IIII", t // 10**6, t % 10**6, len(frame), len(frame)) + frame)
+    shutil.copy(os.path.join(SHARED, "..", "sensors", "velodyne_ros_drivers", "64e_s3-xiesc.yaml"), path[:-5] + ".yaml")
 
 
 def hdl64_points():
@@ -133,7 +159,8 @@ def main():
     cli, work = sys.argv[1], sys.argv[2]
     scans = int(sys.argv[3]) if len(sys.argv) > 3 else 300
     os.makedirs(work, exist_ok=True)
-    rows = [("Ouster OS-2-128 pcap", os.path.join(work, "long.pcap"), long_pcap), ("ROS 1 bag, PointCloud2", os.path.join(work, "long.bag"), long_bag),
+    rows = [("Ouster OS-2-128 pcap", os.path.join(work, "long.pcap"), long_pcap),
+            ("Velodyne HDL-64E pcap", os.path.join(work, "velodyne.pcap"), long_velodyne_pcap), ("ROS 1 bag, PointCloud2", os.path.join(work, "long.bag"), long_bag),
             ("ROS 2 bag (sqlite3), PointCloud2", os.path.join(work, "long_db3"), long_db3),
             ("MCAP, zstd chunks, PointCloud2", os.path.join(work, "long.mcap"), long_mcap)]
     print("| recording | size | scans | time | real time x | peak memory |\n|---|---|---|---|---|---|")

@@ -11,7 +11,7 @@ src=$(cd "$(dirname "$0")/.." && pwd)
 names=("$@")
 [ ${#names[@]} -gt 0 ] || names=(fuzz_kitti_bin fuzz_ply_points fuzz_pcd_points fuzz_text_points fuzz_poses
                                  fuzz_mesh_reader fuzz_sensor_json fuzz_reconstruct fuzz_live_stream
-                                 fuzz_ouster_pcap fuzz_point_cloud2 fuzz_cdr_point_cloud2 fuzz_mcap fuzz_tf)
+                                 fuzz_ouster_pcap fuzz_velodyne_pcap fuzz_point_cloud2 fuzz_cdr_point_cloud2 fuzz_mcap fuzz_tf)
 mkdir -p "$dir/artifacts" "$dir/logs"
 status=0
 printf '%-18s %8s %12s %10s %8s  %s\n' harness seconds executions exec/s corpus result

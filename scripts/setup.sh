@@ -20,7 +20,8 @@ PKGS=(
   python3-dev pybind11-dev   # Python bindings (Debian's /usr/bin/python3)
   python3-numpy python3-pytest
   python3-distributed  # Dask: a map fused in tiles on many workers (lidarsurf.fuse_tiles)
-  libpcap-dev          # recordings: packet captures (Ouster pcaps)
+  libpcap-dev          # recordings: packet captures (Ouster and Velodyne pcaps)
+  libyaml-dev          # recordings: Velodyne calibrations (the ROS velodyne driver's YAML)
   librosbag-storage-dev  # recordings: ROS 1's own bag reader (optional: the build reads no bags without it)
   libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev  # recordings: ROS 2 bags (.db3; MCAP chunks and their CRC)
   lz4                  # tests: LZ4 frames of the MCAP chunks the tests write
@@ -65,11 +66,11 @@ if [ ! -f "$viewer/node_modules/three/build/three.min.js" ]; then
   echo "setup: npm ci in $viewer (three.js for lidarsurf view)"
   (cd "$viewer" && npm ci --no-audit --no-fund --loglevel=error)
 fi
-# The format maintainers' MCAP and CDR writers (the pinned versions of tests/io/ros2/package-lock.json)
-# that write the ROS 2 bags of the tests.
+# The format maintainers' MCAP and CDR writers that write the ROS 2 bags of the tests, and Foxglove's
+# Velodyne decoder that checks ours (the pinned versions of tests/io/ros2/package-lock.json).
 ros2_writers="$(cd "$(dirname "$0")/.." && pwd)/tests/io/ros2"
-if [ ! -d "$ros2_writers/node_modules/@mcap/core" ]; then
-  echo "setup: npm ci in $ros2_writers (@mcap/core and @foxglove/cdr for the ROS 2 bag tests)"
+if [ ! -d "$ros2_writers/node_modules/@mcap/core" ] || [ ! -d "$ros2_writers/node_modules/@foxglove/velodyne-cloud" ]; then
+  echo "setup: npm ci in $ros2_writers (@mcap/core, @foxglove/cdr and @foxglove/velodyne-cloud for the recordings tests)"
   (cd "$ros2_writers" && npm ci --no-audit --no-fund --loglevel=error)
 fi
 # `setup.sh viewer`: playwright-core (the pinned version of tests/viewer/package-lock.json), which

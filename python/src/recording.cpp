@@ -99,7 +99,8 @@ void bind_recording(py::module_& m) {
         py::arg("path"), py::arg("topic") = py::none(), py::arg("poses") = py::none(), py::arg("metadata") = py::none(),
         py::arg("times") = py::none(), py::arg("deskew") = true, py::arg("returns") = "first", py::arg("pose_topic") = "",
         py::arg("fixed_frame") = "", py::arg("sensor_frame") = "",
-        "The scans of a recording (an Ouster .pcap with its metadata JSON beside it or `metadata`, a ROS 1 .bag of\n"
+        "The scans of a recording (an Ouster .pcap with its metadata JSON beside it or `metadata`, a Velodyne .pcap\n"
+        "(VLP-16, VLP-32C, HDL-32E with their built-in angles, HDL-64E with its calibration YAML beside it or `metadata`), a ROS 1 .bag of\n"
         "PointCloud2 or Ouster packets on `topic`, a ROS 2 bag of PointCloud2: its directory, a .db3 or a .mcap), one at a time, as tuples (stamp_ns, points, times, pose):\n"
         "points (N, 3) float64 in the sensor frame; times (N,) float32 seconds after stamp_ns, or None when the\n"
         "recording has none; pose the 4x4 sensor-to-world matrix at stamp_ns from the trajectory `poses` (TUM, or\n"

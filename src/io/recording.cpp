@@ -1,5 +1,5 @@
-// Recordings (see recording.hpp): which reader a file goes to, the Ouster pcap source, and the
-// summary `lidarsurf info` prints.
+// Recordings (see recording.hpp): which reader a file goes to, the Ouster and Velodyne pcap
+// sources, and the summary `lidarsurf info` prints.
 #include "lidarsurf/io/recording.hpp"
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/pcap.hpp"
+#include "lidarsurf/io/velodyne.hpp"
 #include "recording_sources.hpp"
 
 namespace lidarsurf {
@@ -19,26 +20,35 @@ std::string joined(const std::vector<std::string>& v) {
     return s;
 }
 
+// Feeds a capture's datagrams to `port` into `sweeps` (through `add`, true when a sweep closed)
+// until a sweep is done or the capture ends; then the last sweep.
+template <typename Sweeps, typename Add>
+bool next_sweep(PcapUdpReader& pcap, Sweeps& sweeps, std::uint16_t port, bool& ended, RecordedScan& scan, Add&& add) {
+    UdpDatagram d;
+    while (!ended && pcap.next(d)) {
+        if (d.destination_port != port) continue;
+        if (add(d, pcap.name() + ": packet " + std::to_string(d.packet))) {
+            scan = sweeps.take();
+            return true;
+        }
+    }
+    ended = true;
+    if (sweeps.finish()) {
+        scan = sweeps.take();
+        return true;
+    }
+    return false;
+}
+
 class OusterPcapSource final : public ScanSource {
 public:
     OusterPcapSource(const std::filesystem::path& path, OusterMetadata metadata, OusterReturns returns)
         : pcap_(path), sweeps_(std::move(metadata), returns) {}
 
     bool next(RecordedScan& scan) override {
-        UdpDatagram d;
-        while (!ended_ && pcap_.next(d)) {
-            if (d.destination_port != sweeps_.metadata().udp_port_lidar) continue;  // IMU packets, other traffic
-            if (sweeps_.add(d.payload, pcap_.name() + ": packet " + std::to_string(d.packet))) {
-                scan = sweeps_.take();
-                return true;
-            }
-        }
-        ended_ = true;
-        if (sweeps_.finish()) {
-            scan = sweeps_.take();
-            return true;
-        }
-        return false;
+        // Other ports: IMU packets, other traffic.
+        return next_sweep(pcap_, sweeps_, static_cast<std::uint16_t>(sweeps_.metadata().udp_port_lidar), ended_, scan,
+                          [&](const UdpDatagram& d, const std::string& where) { return sweeps_.add(d.payload, where); });
     }
 
     std::string description() const override {
@@ -50,6 +60,76 @@ private:
     OusterSweeps sweeps_;
     bool ended_ = false;
 };
+
+class VelodynePcapSource final : public ScanSource {
+public:
+    VelodynePcapSource(const std::filesystem::path& path, VelodyneModel model, VelodyneCalibration calibration, OusterReturns returns,
+                       std::uint16_t port, int return_mode)
+        : pcap_(path),
+          sweeps_(model, std::move(calibration), returns == OusterReturns::Both ? VelodyneReturns::Both : VelodyneReturns::First, return_mode),
+          port_(port) {}
+
+    bool next(RecordedScan& scan) override {
+        // Other ports: position packets (8308), other traffic.
+        return next_sweep(pcap_, sweeps_, port_, ended_, scan,
+                          [&](const UdpDatagram& d, const std::string& where) { return sweeps_.add(d.payload, d.stamp_ns, where); });
+    }
+
+    std::string description() const override { return sweeps_.description() + ", UDP port " + std::to_string(port_) + ", pcap"; }
+
+private:
+    PcapUdpReader pcap_;
+    VelodyneSweeps sweeps_;
+    std::uint16_t port_;
+    bool ended_ = false;
+};
+
+// The first Velodyne data packet among a capture's first datagrams, and its port.
+std::optional<std::pair<std::vector<std::uint8_t>, std::uint16_t>> first_velodyne_packet(const std::filesystem::path& path) {
+    PcapUdpReader pcap(path);
+    UdpDatagram d;
+    for (int i = 0; i < 4096 && pcap.next(d); ++i) {
+        if (is_velodyne_data_packet(d.payload)) return std::make_pair(std::move(d.payload), d.destination_port);
+        if (d.payload.size() >= 1200 && d.payload[0] == 0xFF && d.payload[1] == 0xEE)
+            throw FormatError(pcap.name() + ": packet " + std::to_string(d.packet) + ": " + std::to_string(d.payload.size()) +
+                              "-byte datagrams to port " + std::to_string(d.destination_port) +
+                              " with Velodyne block flags, where a Velodyne data packet has 1206 bytes (not a layout lidarsurf reads)");
+    }
+    return std::nullopt;
+}
+
+bool is_yaml(const std::filesystem::path& p) {
+    const std::string e = detail::lower_extension(p);
+    return e == ".yaml" || e == ".yml";
+}
+
+std::unique_ptr<ScanSource> open_velodyne_pcap(const std::filesystem::path& path, const RecordingOptions& options,
+                                               const std::vector<std::uint8_t>& packet, std::uint16_t port) {
+    std::optional<VelodyneCalibration> calibration;
+    std::filesystem::path file = options.metadata;
+    std::error_code ec;
+    if (file.empty())
+        for (const char* e : {".yaml", ".yml"})
+            if (std::filesystem::exists(std::filesystem::path(path).replace_extension(e), ec)) {
+                file = std::filesystem::path(path).replace_extension(e);
+                break;
+            }
+    if (!file.empty()) calibration = read_velodyne_calibration(file);
+    std::optional<VelodyneModel> model = velodyne_model_of_packet(packet);
+    if (!model) {
+        // No product byte (the HDL-64E sends status bytes there): the calibration says which.
+        if (!calibration)
+            throw InvalidArgument(path.string() + ": Velodyne packets without a product id (an HDL-64E?) need the sensor's calibration: "
+                                  "give the ROS velodyne driver's YAML with --metadata, or put it beside the pcap as " +
+                                  std::filesystem::path(path).replace_extension(".yaml").string());
+        const std::size_t n = calibration->lasers.size();
+        model = n == 64 ? VelodyneModel::HDL64E : n == 32 ? VelodyneModel::HDL32E : VelodyneModel::VLP16;
+    }
+    if (!calibration) calibration = velodyne_factory_calibration(*model);
+    if (!calibration)
+        throw InvalidArgument(path.string() + ": a Velodyne " + std::string(velodyne_model_name(*model)) + " needs its calibration (--metadata FILE.yaml)");
+    return std::make_unique<VelodynePcapSource>(path, *model, std::move(*calibration), options.returns, port, packet[1204]);
+}
 
 }  // namespace
 
@@ -92,14 +172,19 @@ std::string choose_scan_topic(const std::vector<TopicType>& topics, const std::s
     throw InvalidArgument(where + ": no " + cloud_type + (packet_type.empty() ? "" : " or Ouster packet") + " topic in the recording");
 }
 
-std::unique_ptr<ScanSource> open_ouster_pcap(const std::filesystem::path& path, const RecordingOptions& options) {
+std::unique_ptr<ScanSource> open_pcap(const std::filesystem::path& path, const RecordingOptions& options) {
     std::filesystem::path metadata = options.metadata;
-    if (metadata.empty()) {
-        metadata = std::filesystem::path(path).replace_extension(".json");
-        std::error_code ec;
-        if (!std::filesystem::exists(metadata, ec))
-            throw InvalidArgument(path.string() + ": no sensor metadata: " + metadata.string() +
+    std::error_code ec;
+    if (metadata.empty() || is_yaml(metadata)) {
+        const std::filesystem::path beside = std::filesystem::path(path).replace_extension(".json");
+        if (metadata.empty() && std::filesystem::exists(beside, ec)) {
+            metadata = beside;
+        } else {
+            if (auto velodyne = first_velodyne_packet(path)) return open_velodyne_pcap(path, options, velodyne->first, velodyne->second);
+            if (!metadata.empty()) throw InvalidInput(path.string() + ": a Velodyne calibration (" + metadata.string() + ") but no Velodyne data packet in the capture");
+            throw InvalidArgument(path.string() + ": no Velodyne data packet, and no sensor metadata: " + beside.string() +
                                   " is absent (an Ouster pcap needs the sensor's metadata JSON; give it with --metadata)");
+        }
     }
     return std::make_unique<OusterPcapSource>(path, read_ouster_metadata(metadata), options.returns);
 }
@@ -133,7 +218,7 @@ std::unique_ptr<ScanSource> open_recording(const std::filesystem::path& path, co
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw IoError(path.string() + ": no such file");
     const std::string e = detail::lower_extension(path);
-    if (e == ".pcap" || e == ".pcapng") return detail::open_ouster_pcap(path, options);
+    if (e == ".pcap" || e == ".pcapng") return detail::open_pcap(path, options);
     if (e == ".bag") return detail::open_ros1_bag(path, options);
     if (detail::is_ros2_bag(path)) return detail::open_ros2_bag(path, options);
     throw InvalidInput(path.string() + ": not a recording lidarsurf reads (pcap, ROS 1 bag, ROS 2 bag: a directory with metadata.yaml, .db3 or .mcap)");

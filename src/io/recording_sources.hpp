@@ -38,7 +38,9 @@ public:
     virtual bool next(RawMessage& message) = 0;
 };
 
-std::unique_ptr<ScanSource> open_ouster_pcap(const std::filesystem::path& path, const RecordingOptions& options);
+/// A pcap: Ouster packets when the sensor's metadata JSON is given or beside it, else Velodyne data
+/// packets (with a calibration YAML given or beside it, or the model's factory angles).
+std::unique_ptr<ScanSource> open_pcap(const std::filesystem::path& path, const RecordingOptions& options);
 std::vector<TopicSummary> pcap_topics(const std::filesystem::path& path);
 
 /// ROS 1 bags, through Debian's librosbag-storage; without it (LIDARSURF_HAVE_ROSBAG unset) they

@@ -14,8 +14,19 @@ printf 'hello' > "$dir/text.pcap"
 printf '{"beam_altitude_angles": [1, 2], "beam_azimuth_angles": [0, 0], "lidar_mode": "512x10"}' > "$dir/text.json"
 expect 3 "text.pcap: not a packet capture" -- "$cli" reconstruct "$dir/text.pcap" -o "$out"
 expect 3 "text.pcap: not a packet capture" -- "$cli" info "$dir/text.pcap"
-cp "$dir/text.pcap" "$dir/alone.pcap"
-expect 2 "alone.json is absent.*--metadata" -- "$cli" reconstruct "$dir/alone.pcap" -o "$out"
+# --- Velodyne pcaps (tests/io/velodyne_pcap.py: packets written from the manuals' layout).
+vp="$(dirname "$0")/../io/velodyne_pcap.py"
+/usr/bin/python3 "$vp" VLP16 75 "$dir/vlp16.pcap" 35000
+expect 0 "Velodyne VLP-16, strongest return, 16 lasers \(built-in VLP-16\), UDP port 2368, pcap" -- "$cli" info "$dir/vlp16.pcap"
+expect 0 "2 scans \(2 partial: less than a revolution\), 26182 points" -- "$cli" info "$dir/vlp16.pcap"
+expect 0 "vlp16.pcap scan 1: .* triangles" -- "$cli" reconstruct "$dir/vlp16.pcap" --scan 1 -o "$dir/vlp16.ply"
+/usr/bin/python3 "$vp" HDL64E 40 "$dir/hdl64.pcap"
+expect 2 "without a product id \(an HDL-64E\?\) need the sensor's calibration.*--metadata" -- "$cli" reconstruct "$dir/hdl64.pcap" -o "$out"
+printf 'lasers:\n- {laser_id: 0, vert_correction: 0.1}\n- {laser_id: 0, vert_correction: 0.2}\n' > "$dir/hdl64.yaml"
+expect 3 "hdl64.yaml: Velodyne calibration: laser_id 0 repeats" -- "$cli" reconstruct "$dir/hdl64.pcap" -o "$out"
+printf 'lasers:\n- {laser_id: 0, vert_correction: 0.1}\n- {laser_id: 1, vert_correction: 0.2}\n' > "$dir/two.yaml"
+expect 3 "two.yaml: a calibration of 2 lasers for a Velodyne VLP-16, which has 16" -- "$cli" reconstruct "$dir/vlp16.pcap" --metadata "$dir/two.yaml" -o "$out"
+check "no output after the failures" -- test ! -e "$out"
 printf '#ROSBAG V2.0\nnot a bag at all' > "$dir/text.bag"
 expect 3 "text.bag: not a readable ROS 1 bag|reads no ROS 1 bags" -- "$cli" reconstruct "$dir/text.bag" -o "$out"
 mkdir -p "$dir/ros2" && : > "$dir/ros2/metadata.yaml"
@@ -54,6 +65,11 @@ check "nothing written for a scan that is not there" -- test ! -e "$dir/five.ply
 # Metadata of another sensor: the packets' size disagrees, exit 3 naming the packet.
 expect 3 "packet [0-9]+.* bytes where the metadata's" -- "$cli" reconstruct "$pcap" --metadata "$ouster/OS-0-32-U1_v2.2.0_1024x10.json" -o "$dir/m.ply"
 check "nothing written for mismatched metadata" -- test ! -e "$dir/m.ply"
+# Ouster packets without their metadata beside them.
+cp "$pcap" "$dir/alone.pcap"
+expect 2 "no Velodyne data packet, and no sensor metadata: .*alone.json is absent.*--metadata" -- "$cli" reconstruct "$dir/alone.pcap" -o "$dir/a.ply"
+# The SDK's one-packet capture: 1212-byte datagrams with Velodyne block flags, not a data packet.
+expect 3 "VLP-16-one-packet.pcap: packet 0: 1212-byte datagrams to port 2368 with Velodyne block flags" -- "$cli" info "$ouster/VLP-16-one-packet.pcap"
 # A pcap cut in the middle of a packet.
 head -c 300000 "$pcap" > "$dir/cut.pcap" && cp "${pcap%.pcap}.json" "$dir/cut.json"
 expect 3 "cut.pcap: packet [0-9]+ \(byte [0-9]+\)" -- "$cli" reconstruct "$dir/cut.pcap" -o "$dir/cut.ply"

@@ -1,5 +1,6 @@
 #pragma once
 // Recordings of a robot's drive as scans: an Ouster pcap (with the sensor's metadata JSON), a
+// Velodyne pcap (with its calibration, or a fixed-angle model's built-in one), a
 // ROS 1 bag of sensor_msgs/PointCloud2 or of the Ouster driver's raw packets, and a ROS 2 bag
 // (rosbag2's directory, a .db3 or an .mcap) of sensor_msgs/msg/PointCloud2. Scans are read one
 // at a time (memory does not grow with the recording's length), in the recording's order.
@@ -18,7 +19,8 @@ struct RecordingOptions {
     /// The topic the scans are on (bags). Empty: the bag's only PointCloud2 topic, else its Ouster
     /// lidar packets.
     std::string topic;
-    /// The Ouster metadata JSON. Empty: beside the pcap under its base name (X.pcap -> X.json),
+    /// The Ouster metadata JSON, or a Velodyne calibration YAML. Empty: beside the pcap under its
+    /// base name (X.pcap -> X.json, X.yaml), the built-in angles of a VLP-16, VLP-32C or HDL-32E,
     /// or the bag's Ouster metadata topic.
     std::filesystem::path metadata;
     OusterReturns returns = OusterReturns::First;
