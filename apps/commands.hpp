@@ -61,7 +61,7 @@ struct SimulateOptions {
     bool gt_given = false;  // --gt given, even with an empty name (an error)
     bool quiet = false;     // no progress report
     int frames = 100, gt_beams = 316, moving_cars = 3, pedestrians = 0, cyclists = 0, leaving_cars = 0, parking_cars = 0;
-    double length = 240.0;
+    double length = 240.0, speed = 8.0, weave = 0.0, sweep_seconds = 0.0;
     std::uint64_t seed = 1;
 };
 CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o);
@@ -153,7 +153,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in);
 /// its settings ("config"), the frame count.
 nlohmann::json fuse_report_head(const FuseInput& in, const Method& m);
 struct MapBenchmarkOptions {
-    std::string dir, out, vdbfusion, fuse_options;
+    std::string dir, out, vdbfusion, fuse_options, fuse_input;
     std::string rows = "default,no-carving,paper";
     int frames = 0, gt_stride = 5, threads = 0;
     bool quiet = false;

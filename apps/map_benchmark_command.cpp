@@ -44,6 +44,9 @@ CLI::App* add_map_benchmark_command(CLI::App& app, MapBenchmarkOptions& o) {
         ->capture_default_str();
     c->add_option("--fuse-options", o.fuse_options,
                   "More options for every lidarsurf row, as one string (an ablation: \"--truncation-voxels 1.5\")");
+    c->add_option("--fuse-input", o.fuse_input,
+                  "The lidarsurf rows fuse this recording of the drive (a bag of its scans, with --fuse-options \"--poses TUM\") "
+                  "instead of DIR's scans; the scoring is DIR's");
     c->add_option("--vdbfusion", o.vdbfusion, "VDBFusion peer program (make map-peers builds build-peers/lidarsurf_vdbfusion_peer)");
     c->add_option("--gt-stride", o.gt_stride, "Ground truth from every this-many-th GT scan")->capture_default_str();
     c->add_option("--max-distance", o.eval.max_distance, "Score only within this horizontal distance of the drive (metres)")->capture_default_str();
@@ -112,6 +115,7 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
     const fs::path out = o.out.empty() ? seq.dir / "map_benchmark" : fs::path(o.out);
     FileRoles files;
     files.input_sequence(seq.dir);
+    if (!o.fuse_input.empty()) files.input(o.fuse_input);
     files.output_directory(out, "--out");
     files.check();
     fs::create_directories(out / "rows");
@@ -124,7 +128,7 @@ int run_map_benchmark(const MapBenchmarkOptions& o) {
     std::vector<Row> rows;
     for (const std::string& name : split(o.rows)) {
         const std::string mesh = (out / "rows" / (name + ".ply")).string(), json = (out / "rows" / (name + ".json")).string();
-        std::vector<std::string> fuse = {self, "fuse", seq.dir.string(), "-o", mesh, "--json", json, "--frames", n, "--threads", threads, "-q"};
+        std::vector<std::string> fuse = {self, "fuse", o.fuse_input.empty() ? seq.dir.string() : o.fuse_input, "-o", mesh, "--json", json, "--frames", n, "--threads", threads, "-q"};
         auto with = [&](std::vector<std::string> extra) {
             std::vector<std::string> a = fuse;
             a.insert(a.end(), extra.begin(), extra.end());

@@ -2,6 +2,11 @@
 // KITTI odometry layout (or one scan to one file).
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include <Eigen/Geometry>
 
 #include "commands.hpp"
 #include "file_roles.hpp"
@@ -29,6 +34,30 @@ std::string no_return_message(const std::string& sensor) {
     return "the sensor (" + sensor + ") sees nothing from where it stands: no ray returns within its range; nothing was written";
 }
 
+void write_binary(const fs::path& path, const std::vector<float>& values) {
+    std::ofstream out(path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
+    if (!out) throw IoError(path.string() + ": cannot write");
+}
+
+// With sweeps that take time: the frames' times (KITTI's times.txt, s from the drive's start) and
+// the sensor's trajectory every 10 ms as TUM (t x y z qx qy qz qw) to the last sweep's end.
+void write_sweep_times(const sim::Simulator& simulator, const std::vector<double>& frame_times, const fs::path& dir) {
+    std::ostringstream times, tum;
+    times << std::setprecision(17);
+    tum << std::setprecision(17);
+    for (double t : frame_times) times << t << "\n";
+    const double end = (frame_times.empty() ? 0.0 : frame_times.back()) + simulator.config().sweep_seconds;
+    for (int k = 0; k * 0.01 <= end + 0.01; ++k) {
+        const Eigen::Isometry3d p = simulator.pose_at_time(k * 0.01);
+        const Eigen::Quaterniond q(p.linear());
+        tum << k * 0.01 << " " << p.translation().x() << " " << p.translation().y() << " " << p.translation().z() << " " << q.x() << " "
+            << q.y() << " " << q.z() << " " << q.w() << "\n";
+    }
+    write_text((dir / "times.txt").string(), times.str());
+    write_text((dir / "poses_tum.txt").string(), tum.str());
+}
+
 sim::World load_world(const SimulateOptions& o) {
     const std::string ext = extension_of(o.scene);
     if (ext == ".ply" || ext == ".obj") {
@@ -40,7 +69,7 @@ sim::World load_world(const SimulateOptions& o) {
         const Eigen::Vector3d to = o.to.empty() ? Eigen::Vector3d(from + Eigen::Vector3d(10, 0, 0)) : parse_vec3(o.to, "--to");
         if ((to - from).norm() < 1e-6) throw InvalidArgument("--to must differ from --from");
         w.path = {from, to};
-        w.config.ego_speed = 8.0;
+        w.config.ego_speed = o.speed;
         return w;
     }
     sim::SceneConfig sc;
@@ -52,6 +81,8 @@ sim::World load_world(const SimulateOptions& o) {
     sc.cyclists = o.cyclists;
     sc.leaving_cars = o.leaving_cars;
     sc.parking_cars = o.parking_cars;
+    sc.ego_speed = o.speed;
+    sc.weave = o.weave;
     return sim::make_world(sc);
 }
 
@@ -122,6 +153,13 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
     sc->add_option("--cyclists", o.cyclists, "Cyclists riding beside the opposite lane (town)")->capture_default_str();
     sc->add_option("--leaving-cars", o.leaving_cars, "Cars parked at the curb that drive off mid-drive (town)")->capture_default_str();
     sc->add_option("--parking-cars", o.parking_cars, "Cars that drive in and park at the curb mid-drive (town)")->capture_default_str();
+    sc->add_option("--speed", o.speed, "Speed of the sensor rig along the drive, m/s (sets the frame times)")->capture_default_str();
+    sc->add_option("--weave", o.weave, "Town: the drive weaves this many metres to either side of its lane (a 40 m sine; 0 = straight)")
+        ->capture_default_str();
+    sc->add_option("--sweep-seconds", o.sweep_seconds,
+                   "The sensor turns once in this time while the rig moves (0: each frame at one instant); adds times/NNNNNN.bin "
+                   "(float32 s after the frame's time per point), times.txt and poses_tum.txt (every 10 ms)")
+        ->capture_default_str();
     sc->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");
     sc->add_option("--from", o.from, "Mesh scene: ground point where the drive starts, x,y,z");
     sc->add_option("--to", o.to, "Mesh scene: ground point where it ends (default 10 m along +x)");
@@ -135,7 +173,9 @@ int run_simulate(const SimulateOptions& o) {
     cfg.sensor = load_sensor(o.sensor);
     cfg.gt_beams = o.gt_beams;
     cfg.seed = o.seed;
+    cfg.sweep_seconds = o.sweep_seconds;
     const bool single = is_point_extension(o.output);
+    if (single && o.sweep_seconds > 0) throw InvalidArgument("--sweep-seconds writes per-point times: give -o a directory");
     if (single) cfg.frames = 1;
     if (!single && !o.gt.empty()) throw InvalidArgument("--gt goes with a point-file output; a directory gets gt/ itself");
     if (single && o.gt.empty()) cfg.gt_beams = 0;
@@ -157,7 +197,9 @@ int run_simulate(const SimulateOptions& o) {
     AtomicDirectory out(o.output);
     const KittiSequence seq{out.path()};
     std::error_code ec;
-    for (const fs::path& d : {seq.dir / "velodyne", seq.dir / "gt", seq.dir / "objects"}) {
+    const bool sweeps = cfg.sweep_seconds > 0;
+    for (const fs::path& d : {seq.dir / "velodyne", seq.dir / "gt", seq.dir / "objects", seq.dir / "times"}) {
+        if (!sweeps && d.filename() == "times") continue;
         fs::create_directories(d, ec);
         if (ec) throw IoError(d.string() + ": cannot create the directory (" + ec.message() + ")");
     }
@@ -166,6 +208,7 @@ int run_simulate(const SimulateOptions& o) {
     write_mesh(simulator.world().standing_at(simulator.world().time_at(1.0)), seq.scene());
     write_text(seq.sensor().string(), cfg.sensor.to_json());
     std::vector<Eigen::Isometry3d> poses;
+    std::vector<double> frame_times;
     std::size_t points = 0;
     Progress progress("simulate", "frames", simulator.frame_count(), o.quiet);
     for (std::size_t i = 0; i < simulator.frame_count(); ++i) {
@@ -173,11 +216,16 @@ int run_simulate(const SimulateOptions& o) {
         write_points(f.scan, seq.scan(i));
         if (cfg.gt_beams > 0) write_points(f.ground_truth, seq.ground_truth(i));
         if (!f.movers.empty()) write_mesh(f.movers, seq.objects(i));
+        if (sweeps) {
+            write_binary(seq.dir / "times" / seq.scan(i).filename(), f.times);
+            frame_times.push_back(f.time);
+        }
         poses.push_back(f.pose);
         points += f.scan.points.size();
         progress.update(i + 1);
     }
     write_poses(poses, seq.poses());
+    if (sweeps) write_sweep_times(simulator, frame_times, seq.dir);
     out.commit();
     progress.finish();
     std::printf("simulated %zu frames of scene %s with %s (%.0f points per frame, seed %llu, %zu scene triangles) -> %s\n",

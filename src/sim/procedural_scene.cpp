@@ -234,7 +234,13 @@ void make_town(World& w, Rng& rng) {
         w.movers.push_back(std::move(m));
     }
     const double margin = 35.0;
-    for (double x = -half + margin; x <= half - margin + 1e-9; x += 1.0) w.path.push_back({x, -1.75, 0.0});
+    if (w.config.weave > 0) {
+        // A weaving drive, sampled every 10 cm: its heading turns smoothly, not at 1 m corners.
+        for (double x = -half + margin; x <= half - margin + 1e-9; x += 0.1)
+            w.path.push_back({x, -1.75 + w.config.weave * std::sin(2 * std::numbers::pi * x / SceneConfig::kWeaveWavelength), 0.0});
+    } else {
+        for (double x = -half + margin; x <= half - margin + 1e-9; x += 1.0) w.path.push_back({x, -1.75, 0.0});
+    }
     // Cars that leave their spot or park in one, each at its time within the middle half of the
     // drive, in the traffic direction of their side (drawn after everything else: the other
     // movers and the static scene of a seed do not change with their counts).
@@ -339,6 +345,7 @@ void SceneConfig::validate() const {
     if (leaving_cars < 0 || leaving_cars > 100 || parking_cars < 0 || parking_cars > 100)
         throw InvalidArgument("leaving and parking cars must be in [0, 100]");
     if (!(ego_speed > 0 && ego_speed <= 100)) throw InvalidArgument("ego speed must be in (0, 100] m/s");
+    if (!(weave >= 0 && weave <= 3)) throw InvalidArgument("weave must be in [0, 3] m");
 }
 
 Eigen::Vector3d Mover::position_at(double t) const {

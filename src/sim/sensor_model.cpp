@@ -168,18 +168,28 @@ std::string SensorModel::to_json() const {
     return j.dump(2) + "\n";
 }
 
+std::size_t azimuth_steps(const SensorModel& sensor) { return static_cast<std::size_t>(std::lround(360.0 / sensor.azimuth_step_deg)); }
+
 PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const Eigen::Isometry3d& pose, std::uint64_t seed) {
+    return simulate_sweep(scene, sensor, {pose}, seed);
+}
+
+PointCloud simulate_sweep(const RayScene& scene, const SensorModel& sensor, const std::vector<Eigen::Isometry3d>& step_poses,
+                          std::uint64_t seed, std::vector<std::uint32_t>* point_steps) {
     sensor.validate();
-    const auto steps = static_cast<std::size_t>(std::lround(360.0 / sensor.azimuth_step_deg));
+    const std::size_t steps = azimuth_steps(sensor);
+    if (step_poses.size() != 1 && step_poses.size() != steps)
+        throw InvalidArgument("a sweep needs one pose, or one per azimuth step (" + std::to_string(steps) + ")");
     const std::size_t beams = sensor.elevations_deg.size();
     const double deg = std::numbers::pi / 180.0;
-    const Eigen::Matrix3d rot = pose.linear();
-    const Eigen::Vector3d origin = pose.translation();
     std::vector<Eigen::Vector3d> hits(steps * beams);
     std::vector<std::uint8_t> valid(steps * beams, 0);
     const std::uint64_t key = splitmix64(seed);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, steps, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t a = r.begin(); a != r.end(); ++a) {
+            const Eigen::Isometry3d& pose = step_poses[step_poses.size() == 1 ? 0 : a];
+            const Eigen::Matrix3d rot = pose.linear();
+            const Eigen::Vector3d origin = pose.translation();
             const double az = static_cast<double>(a) * sensor.azimuth_step_deg * deg;
             for (std::size_t b = 0; b < beams; ++b) {
                 const std::size_t ray = a * beams + b;
@@ -200,8 +210,12 @@ PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const
         }
     });
     PointCloud cloud;
-    for (std::size_t i = 0; i < hits.size(); ++i)
-        if (valid[i]) cloud.points.push_back(hits[i]);
+    if (point_steps) point_steps->clear();
+    for (std::size_t i = 0; i < hits.size(); ++i) {
+        if (!valid[i]) continue;
+        cloud.points.push_back(hits[i]);
+        if (point_steps) point_steps->push_back(static_cast<std::uint32_t>(i / beams));
+    }
     return cloud;
 }
 

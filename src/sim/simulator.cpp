@@ -36,6 +36,7 @@ std::uint64_t frame_seed(std::uint64_t seed, std::size_t index) {
 void SimulatorConfig::validate() const {
     if (frames < 1 || frames > 100000) throw InvalidArgument("frames must be in [1, 100000]");
     if (gt_beams < 0 || gt_beams > 4096) throw InvalidArgument("ground-truth beams must be in [0, 4096]");
+    if (!(sweep_seconds >= 0 && sweep_seconds <= 1)) throw InvalidArgument("sweep seconds must be in [0, 1]");
     sensor.validate();
 }
 
@@ -48,6 +49,11 @@ double Simulator::fraction(std::size_t index) const {
 
 SensorModel Simulator::ground_truth_sensor() const { return SensorModel::ground_truth_for(config_.sensor, std::max(1, config_.gt_beams)); }
 
+Eigen::Isometry3d Simulator::pose_at_time(double seconds) const {
+    const double duration = world_.time_at(1.0);
+    return world_.pose_at(duration > 0 ? seconds / duration : 0.0, config_.sensor.mount_height);
+}
+
 SimulatedFrame Simulator::frame(std::size_t index) const {
     if (index >= frame_count()) throw InvalidArgument("frame index out of range");
     SimulatedFrame f;
@@ -59,7 +65,18 @@ SimulatedFrame Simulator::frame(std::size_t index) const {
     std::optional<MeshScene> movers;
     if (!f.movers.empty()) movers.emplace(f.movers);
     const UnionScene scene(static_scene_, movers ? &*movers : nullptr);
-    f.scan = simulate_scan(scene, config_.sensor, f.pose, frame_seed(config_.seed, index));
+    if (config_.sweep_seconds > 0) {
+        const std::size_t steps = azimuth_steps(config_.sensor);
+        std::vector<Eigen::Isometry3d> poses(steps);
+        for (std::size_t a = 0; a < steps; ++a)
+            poses[a] = a == 0 ? f.pose : pose_at_time(f.time + config_.sweep_seconds * static_cast<double>(a) / static_cast<double>(steps));
+        std::vector<std::uint32_t> step;
+        f.scan = simulate_sweep(scene, config_.sensor, poses, frame_seed(config_.seed, index), &step);
+        f.times.resize(step.size());
+        for (std::size_t i = 0; i < step.size(); ++i) f.times[i] = static_cast<float>(config_.sweep_seconds * step[i] / static_cast<double>(steps));
+    } else {
+        f.scan = simulate_scan(scene, config_.sensor, f.pose, frame_seed(config_.seed, index));
+    }
     if (config_.gt_beams > 0) f.ground_truth = simulate_scan(scene, ground_truth_sensor(), f.pose, 0);
     return f;
 }

@@ -168,6 +168,42 @@ TEST(Simulator, ReturnsLieOnTheSceneSurface) {
     }
 }
 
+TEST(Simulator, ASweepThatTakesTimeCastsEachRayFromWhereTheRigIsThen) {
+    // A weaving drive at 10 m/s: each point, placed by the pose at its own time, lies on the
+    // scene; placed by the frame's pose, as without de-skew, the last ones are 0.9 m or more away.
+    SceneConfig sc = small(SceneKind::Town);
+    sc.weave = 1.5;
+    sc.ego_speed = 10;
+    SimulatorConfig cfg;
+    cfg.frames = 3;  // frame 1: mid-drive
+    cfg.sensor = SensorModel::vlp16();
+    cfg.sensor.range_noise = 0;
+    cfg.gt_beams = 0;
+    cfg.sweep_seconds = 0.1;
+    const Simulator sim(make_world(sc), cfg);
+    const SimulatedFrame f = sim.frame(1);
+    const MeshDistance surface(sim.world().scene_at(f.time));
+    ASSERT_EQ(f.times.size(), f.scan.points.size());
+    ASSERT_GT(f.scan.points.size(), 5000u);
+    double worst = 0, late = 0;
+    std::size_t late_count = 0;
+    for (std::size_t i = 0; i < f.scan.points.size(); ++i) {
+        ASSERT_GE(f.times[i], 0.0f);
+        ASSERT_LT(f.times[i], 0.1f);
+        const Eigen::Vector3d p = sim.pose_at_time(f.time + f.times[i]) * f.scan.points[i];
+        worst = std::max(worst, surface.distance(p));
+        if (f.times[i] > 0.09f) {
+            late += (p - f.pose * f.scan.points[i]).norm();
+            ++late_count;
+        }
+    }
+    EXPECT_LT(worst, 2e-3);  // float ray casting at <= 100 m
+    ASSERT_GT(late_count, 100u);
+    EXPECT_GT(late / static_cast<double>(late_count), 0.85);  // 0.9 m driven (and turned) since the sweep began
+    // The first step fires at the frame's instant: the sweep starts where the frame's pose is.
+    EXPECT_LT((sim.pose_at_time(f.time).translation() - f.pose.translation()).norm(), 1e-9);
+}
+
 TEST(Simulator, FramesAreEquiSampledAlongTheDrive) {
     SimulatorConfig cfg;
     cfg.frames = 5;

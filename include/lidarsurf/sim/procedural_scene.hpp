@@ -34,6 +34,10 @@ struct SceneConfig {
     int leaving_cars = 0;     ///< town: cars parked at the curb that pull out and drive off, each at its time within the drive
     int parking_cars = 0;     ///< town: cars that drive in and park at the curb, each at its time within the drive
     double ego_speed = 8.0;   ///< m/s of the sensor rig along the path (sets the frame times)
+    /// town: the drive weaves this many metres to either side of its lane, a sine of kWeaveWavelength
+    /// (the rig turns: at 10 m/s and 1.5 m, up to 21 degrees a second); 0 drives straight.
+    double weave = 0.0;
+    static constexpr double kWeaveWavelength = 40.0;
 
     void validate() const;
 };

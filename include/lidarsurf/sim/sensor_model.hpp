@@ -62,6 +62,15 @@ struct SensorModel {
 PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const Eigen::Isometry3d& pose,
                          std::uint64_t seed);
 
+/// One revolution of a sensor that moves while it turns: azimuth step a (of rays_per_revolution()
+/// / beams, counter-clockwise from x, the seam at azimuth 0) is cast from `step_poses[a]`. The hits
+/// are in the sensor frame of their own step, as a spinning lidar reports them; `steps`, when
+/// given, receives each point's step (its time is step / steps of the revolution).
+PointCloud simulate_sweep(const RayScene& scene, const SensorModel& sensor, const std::vector<Eigen::Isometry3d>& step_poses,
+                          std::uint64_t seed, std::vector<std::uint32_t>* steps = nullptr);
+/// Azimuth steps of one revolution.
+std::size_t azimuth_steps(const SensorModel& sensor);
+
 /// Same, with the sensor axis-aligned at `origin`; returns world coordinates.
 PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const Eigen::Vector3d& origin,
                          std::uint64_t seed);
