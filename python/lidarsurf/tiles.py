@@ -34,12 +34,17 @@ class TileResult(tuple):
 
 
 # The tasks: Python functions, which Dask sends by name (the extension's functions do not pickle).
-def _reaches(sequence, frames):
-    return _ls.sequence_reaches(sequence, frames)
+def _reaches(sequence, frames, recording=None):
+    return _ls.sequence_reaches(sequence, frames, recording)
 
 
-def _tile(sequence, frames, reaches, config, tiles, key, path):
-    return _ls.fuse_tile(sequence, frames, reaches, config, tiles, tuple(key), path)
+def _tile(sequence, frames, reaches, config, tiles, key, path, recording=None):
+    return _ls.fuse_tile(sequence, frames, reaches, config, tiles, tuple(key), path, recording)
+
+
+def _is_recording(path):
+    ext = os.path.splitext(path)[1].lower()
+    return ext in (".pcap", ".pcapng", ".bag", ".db3", ".mcap") or os.path.isfile(os.path.join(path, "metadata.yaml"))
 
 
 @contextlib.contextmanager
@@ -68,7 +73,7 @@ def _write_json(path, data):
 
 
 def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, halo_cubes=32, first=0, frames=0, step=1,
-               plan_chunk=100, retries=2):
+               plan_chunk=100, retries=2, poses=None, times=None, topic=None, metadata=None, deskew=True):
     """Fuse a sequence (KITTI layout, poses as `lidarsurf fuse` finds them) into a map cut in square
     tiles of `tile_size` metres, each tile a task on the dask.distributed `client` (a LocalCluster of
     this machine's cores when None), and write one mesh per tile, out_dir/tile_X_Y.ply, and
@@ -80,11 +85,22 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
     Reading every scan once for the plan is spread over the workers too, `plan_chunk` scans a task.
     A task whose worker dies is run again (up to `retries` times); a mesh is written whole or not at
     all, and what a killed worker left half-written is removed.
+
+    `sequence` may be a recording (pcap, ROS 1 bag, ROS 2 bag) with `poses`, the sensor's trajectory
+    (TUM, or KITTI poses with their `times`; None: the bag's own /tf), `topic` and `metadata` as
+    read_recording takes them: its scans within the trajectory's span, de-skewed unless `deskew` is
+    False; `first`, `frames` and `step` count those scans. Each task reads the recording from its
+    start (streamed) up to the scans it needs.
     """
     config = config if config is not None else _ls.Config()
     tiles = _ls.TileConfig(tile_size, halo_cubes)
     config.validate()
-    indices = _ls.sequence_frames(sequence, first, frames, step)
+    recording = None
+    if _is_recording(sequence):
+        recording = {"poses": poses, "times": times, "topic": topic, "metadata": metadata, "deskew": bool(deskew)}
+    elif poses is not None or times is not None or topic is not None or metadata is not None:
+        raise ValueError(f"{sequence}: poses, times, topic and metadata go with a recording (pcap, ROS 1 or 2 bag)")
+    indices = _ls.sequence_frames(sequence, first, frames, step, recording)
     with contextlib.ExitStack() as stack:
         if client is None:
             client = stack.enter_context(_local_client())
@@ -92,14 +108,14 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
                 config = copy.copy(config)  # by its fields (lidarsurf/__init__.py)
                 config.threads = 1
         chunks = [indices[i:i + plan_chunk] for i in range(0, len(indices), plan_chunk)]
-        parts = client.gather(client.map(_reaches, [sequence] * len(chunks), chunks, retries=retries, pure=False))
+        parts = client.gather(client.map(_reaches, [sequence] * len(chunks), chunks, [recording] * len(chunks), retries=retries, pure=False))
         reaches = np.concatenate(parts)
         plan = _ls.TilePlan(reaches, config, tiles)
         os.makedirs(out_dir, exist_ok=True)
         shared = client.scatter(reaches, broadcast=True)
         keys = plan.tiles
         paths = [os.path.join(out_dir, f"tile_{x}_{y}.ply") for x, y in keys]
-        futures = [client.submit(_tile, sequence, indices, shared, config, tiles, key, path, retries=retries, pure=False)
+        futures = [client.submit(_tile, sequence, indices, shared, config, tiles, key, path, recording, retries=retries, pure=False)
                    for key, path in zip(keys, paths)]
         counts = client.gather(futures)
     for name in os.listdir(out_dir):  # what a killed worker was writing
@@ -130,7 +146,7 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
 def main(argv=None):
     p = argparse.ArgumentParser(prog="python3 -m lidarsurf.tiles",
                                 description="Fuse a sequence into a map cut in tiles, one Dask task per tile.")
-    p.add_argument("sequence", help="sequence directory (KITTI layout: velodyne/NNNNNN.bin, poses.txt)")
+    p.add_argument("sequence", help="sequence directory (KITTI layout: velodyne/NNNNNN.bin, poses.txt), or a recording")
     p.add_argument("out_dir", help="where the tiles' meshes (tile_X_Y.ply) and index.json go")
     p.add_argument("--tile-size", type=float, default=100.0, help="side of the square tiles, metres (default 100)")
     p.add_argument("--tile-halo-cubes", type=int, default=32, help="cubes a tile's surface search reaches beyond it")
@@ -138,6 +154,11 @@ def main(argv=None):
     p.add_argument("--first", type=int, default=0)
     p.add_argument("--frames", type=int, default=0, help="frames to fuse (0: to the last)")
     p.add_argument("--step", type=int, default=1)
+    p.add_argument("--poses", help="a recording's trajectory: TUM, or KITTI poses with --times (default: the bag's /tf)")
+    p.add_argument("--times", help="the times of KITTI --poses")
+    p.add_argument("--topic", help="a bag's topic of the scans")
+    p.add_argument("--metadata", help="an Ouster metadata JSON or a Velodyne calibration YAML")
+    p.add_argument("--deskew", type=int, default=1, help="0: a recording's scans as recorded, not de-skewed")
     a = p.parse_args(argv)
     client = None
     if a.scheduler:
@@ -145,7 +166,8 @@ def main(argv=None):
         client = Client(a.scheduler)
     try:
         result = fuse_tiles(a.sequence, a.out_dir, a.tile_size, client=client, halo_cubes=a.tile_halo_cubes, first=a.first,
-                            frames=a.frames, step=a.step)
+                            frames=a.frames, step=a.step, poses=a.poses, times=a.times, topic=a.topic, metadata=a.metadata,
+                            deskew=bool(a.deskew))
     except (ValueError, OSError, MemoryError) as e:
         print(f"lidarsurf.tiles: {e}", file=sys.stderr)
         return 2

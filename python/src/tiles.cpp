@@ -4,12 +4,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
 #include <sstream>
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/io/recorded_drive.hpp"
+#include "lidarsurf/io/recorded_poses.hpp"
 #include "lidarsurf/tiles/tiles.hpp"
 #include "lidarsurf/pipeline.hpp"
 
@@ -21,22 +24,75 @@ namespace {
 // One row per scan: viewpoint (3), radius, box min (3), box max (3), has a first point, first point (3).
 constexpr py::ssize_t kReachColumns = 14;
 
-// The sequence's scans `frames` in the world frame (poses as `lidarsurf fuse` finds them).
+// How a recording's scans are found: the trajectory (a TUM or KITTI file with its times, or
+// "recording": the bag's /tf or pose_topic), the scans' topic and the Ouster metadata or Velodyne
+// calibration. Travels to the workers as a dict of strings (picklable).
+struct RecordingSource {
+    std::string poses = "recording", times, topic, metadata, pose_topic, fixed_frame, sensor_frame;
+    bool deskew = true;
+
+    static std::optional<RecordingSource> from(const py::object& o) {
+        if (o.is_none()) return std::nullopt;
+        const py::dict d = o.cast<py::dict>();
+        RecordingSource r;
+        for (auto [key, value] : d) {
+            const std::string k = key.cast<std::string>();
+            if (k == "deskew") r.deskew = value.cast<bool>();
+            else if (k == "poses") r.poses = value.is_none() ? std::string("recording") : value.cast<std::string>();
+            else if (k == "times") r.times = value.is_none() ? "" : value.cast<std::string>();
+            else if (k == "topic") r.topic = value.is_none() ? "" : value.cast<std::string>();
+            else if (k == "metadata") r.metadata = value.is_none() ? "" : value.cast<std::string>();
+            else if (k == "pose_topic") r.pose_topic = value.cast<std::string>();
+            else if (k == "fixed_frame") r.fixed_frame = value.cast<std::string>();
+            else if (k == "sensor_frame") r.sensor_frame = value.cast<std::string>();
+            else throw InvalidArgument("recording: unknown key '" + k + "'");
+        }
+        return r;
+    }
+    RecordedDrive open(const std::string& path) const {
+        RecordedDriveOptions o;
+        o.recording.topic = topic;
+        o.recording.metadata = metadata;
+        o.deskew = deskew;
+        RecordedPosesOptions p;
+        p.pose_topic = pose_topic;
+        p.fixed_frame = fixed_frame;
+        p.sensor_frame = sensor_frame;
+        Trajectory trajectory = poses == "recording" ? read_recorded_poses(path, p, o.recording).trajectory : read_trajectory(poses, times);
+        return RecordedDrive(path, std::move(trajectory), o);
+    }
+};
+
+// The sequence's scans `frames` in the world frame: a KITTI layout (poses as `lidarsurf fuse`
+// finds them), or a recording's scans within its trajectory's span, de-skewed (as `fuse` takes
+// them), read in order (the recording streamed).
 struct Sequence {
-    KittiSequence seq;
+    std::optional<KittiSequence> seq;
+    std::optional<RecordedDrive> drive;
     std::vector<Eigen::Isometry3d> poses;
     std::vector<std::size_t> frames;
 
-    Sequence(const std::string& dir, std::vector<std::size_t> f) : seq{dir}, frames(std::move(f)) {
-        const std::size_t available = seq.frame_count();
-        poses = read_sequence_poses(find_sequence_poses(seq.dir, {}, {}));
+    Sequence(const std::string& dir, std::vector<std::size_t> f, const std::optional<RecordingSource>& recording) : frames(std::move(f)) {
+        std::size_t available = 0;
+        if (recording) {
+            drive.emplace(recording->open(dir));
+            available = drive->size();
+            for (std::size_t k = 0; k < available; ++k) poses.push_back(drive->pose(k));
+        } else {
+            seq.emplace(KittiSequence{dir});
+            available = seq->frame_count();
+            poses = read_sequence_poses(find_sequence_poses(seq->dir, {}, {}));
+        }
         for (std::size_t i : frames)
             if (i >= available || i >= poses.size())
                 throw InvalidArgument(dir + ": frame " + std::to_string(i) + " has no scan or no pose (" + std::to_string(available) +
                                       " scans, " + std::to_string(poses.size()) + " poses)");
     }
-    std::vector<Eigen::Vector3d> scan(std::size_t n) const { return read_world_scan(seq, frames[n], poses[frames[n]]).points; }
-    Eigen::Vector3d viewpoint(std::size_t n) const { return poses[frames[n]].translation(); }
+    std::vector<Eigen::Vector3d> scan(std::size_t n) {
+        if (drive) return drive->world_scan(frames[n]).points;
+        return read_world_scan(*seq, frames[n], poses[frames[n]]).points;
+    }
+    Eigen::Vector3d viewpoint(std::size_t n) const { return drive ? Eigen::Vector3d(poses[frames[n]] * drive->origin()) : poses[frames[n]].translation(); }
 };
 
 py::array_t<double> reaches_array(const std::vector<ScanReach>& reaches) {
@@ -102,28 +158,36 @@ void bind_tiles(py::module_& m) {
 
     m.def(
         "sequence_frames",
-        [](const std::string& sequence, int first, int frames, int step) {
-            const KittiSequence seq{sequence};
-            return select_frames(seq.frame_count(), first, frames, step, sequence);
+        [](const std::string& sequence, int first, int frames, int step, const py::object& recording) {
+            const auto source = RecordingSource::from(recording);
+            std::size_t count = 0;
+            {
+                py::gil_scoped_release release;
+                count = source ? source->open(sequence).size() : KittiSequence{sequence}.frame_count();
+            }
+            return select_frames(count, first, frames, step, sequence);
         },
-        py::arg("sequence"), py::arg("first") = 0, py::arg("frames") = 0, py::arg("step") = 1,
+        py::arg("sequence"), py::arg("first") = 0, py::arg("frames") = 0, py::arg("step") = 1, py::arg("recording") = py::none(),
         "The frames of a sequence (KITTI layout) that `lidarsurf fuse` takes with --first, --frames and --step: from "
         "`first`, every `step`-th, at most `frames` (0: to the last). Raises OSError without velodyne/, ValueError for "
-        "a gap in its numbering or a bad range.");
+        "a gap in its numbering or a bad range. With `recording` (a dict: poses, times, topic, metadata, pose_topic, "
+        "fixed_frame, sensor_frame, deskew), `sequence` is a recording and the frames count its scans within the trajectory.");
 
     m.def(
         "sequence_reaches",
-        [](const std::string& sequence, const std::vector<std::size_t>& frames) {
+        [](const std::string& sequence, const std::vector<std::size_t>& frames, const py::object& recording) {
             std::vector<ScanReach> reaches;
+            const auto source = RecordingSource::from(recording);
             {
                 py::gil_scoped_release release;
-                const Sequence s(sequence, frames);
+                Sequence s(sequence, frames, source);
                 for (std::size_t n = 0; n < frames.size(); ++n) reaches.push_back(scan_reach(s.scan(n), s.viewpoint(n)));
             }
             return reaches_array(reaches);
         },
-        py::arg("sequence"), py::arg("frames"),
-        "The reach of each scan `frames` of a sequence (KITTI layout, poses as `lidarsurf fuse` finds them): an (N, 14) "
+        py::arg("sequence"), py::arg("frames"), py::arg("recording") = py::none(),
+        "The reach of each scan `frames` of a sequence (KITTI layout, poses as `lidarsurf fuse` finds them; a recording "
+        "with `recording`, as sequence_frames takes it): an (N, 14) "
         "array, one row per scan (viewpoint, farthest return, box of its points, its first point), what a TilePlan is made "
         "of. Reading a sequence's scans once, in pieces on many workers if it is long.");
 
@@ -152,8 +216,10 @@ void bind_tiles(py::module_& m) {
     m.def(
         "fuse_tile",
         [](const std::string& sequence, const std::vector<std::size_t>& frames, const py::array_t<double, py::array::c_style | py::array::forcecast>& reaches,
-           const ReconstructionConfig& config, const TileConfig& tiles, std::pair<int, int> tile, const std::string& output) {
+           const ReconstructionConfig& config, const TileConfig& tiles, std::pair<int, int> tile, const std::string& output,
+           const py::object& recording) {
             std::vector<ScanReach> r = reaches_from(reaches);
+            const auto source = RecordingSource::from(recording);
             py::dict out;
             ReconstructionSummary s;
             std::size_t triangles = 0, vertices = 0;
@@ -161,7 +227,7 @@ void bind_tiles(py::module_& m) {
                 py::gil_scoped_release release;
                 const TilePlan plan(std::move(r), config, tiles);
                 if (plan.scan_count() != frames.size()) throw InvalidArgument("fuse_tile: one reach per frame");
-                const Sequence seq(sequence, frames);
+                Sequence seq(sequence, frames, source);
                 const Mesh mesh = fuse_tile(plan, {tile.first, tile.second}, [&](std::size_t n) { return seq.scan(n); }, &s);
                 triangles = mesh.triangles.size(), vertices = mesh.vertices.size();
                 if (!output.empty() && triangles > 0) write_mesh(mesh, output);
@@ -174,7 +240,8 @@ void bind_tiles(py::module_& m) {
             return out;
         },
         py::arg("sequence"), py::arg("frames"), py::arg("reaches"), py::arg("config"), py::arg("tiles"), py::arg("tile"), py::arg("output"),
-        "Fuse and mesh one tile of a sequence's map and write its mesh to `output` atomically (whole or not at all; "
+        py::arg("recording") = py::none(),
+        "Fuse and mesh one tile of a sequence's map (a recording's with `recording`, as sequence_frames takes it) and write its mesh to `output` atomically (whole or not at all; "
         "nothing for a tile without a triangle): the "
         "task fuse_tiles gives a worker. Returns a dict of counts (triangles, vertices, voxels, carved_voxels) and seconds.");
 }

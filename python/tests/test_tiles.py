@@ -50,6 +50,21 @@ def test_the_tiles_are_the_whole_map(drive, client, tmp_path, triangle_rows):
     assert sorted(os.listdir(tmp_path / "tiles")) == sorted([os.path.basename(p) for p in result.paths] + ["index.json"])
 
 
+def test_a_recordings_tiles_are_the_whole_map_of_its_drive(drive, client, tmp_path, triangle_rows):
+    # The drive written as a ROS 1 bag by ROS's own writer (python3-rosbag), fused in tiles from the
+    # bag with its KITTI poses and times: the KITTI layout's whole map, triangle for triangle.
+    pytest.importorskip("rosbag")
+    seq, whole = drive
+    writer = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "io", "kitti_to_ros1_bag.py")
+    subprocess.run(["/usr/bin/python3", writer, str(seq), str(tmp_path / "drive.bag"), str(tmp_path / "times.txt")], check=True)
+    result = lidarsurf.fuse_tiles(str(tmp_path / "drive.bag"), str(tmp_path / "tiles"), tile_size=30, client=client,
+                                  poses=str(seq / "poses.txt"), times=str(tmp_path / "times.txt"))
+    assert len(result.paths) >= 4
+    assert sorted(row for p in result.paths for row in triangle_rows(lidarsurf.read_mesh(p))) == triangle_rows(whole)
+    with pytest.raises(ValueError, match="go with a recording"):
+        lidarsurf.fuse_tiles(str(seq), str(tmp_path / "no"), client=client, poses=str(seq / "poses.txt"))
+
+
 def test_a_worker_killed_mid_tile_changes_nothing(drive, client, tmp_path):
     seq, whole = drive
     calm = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "calm"), tile_size=30, client=client)
