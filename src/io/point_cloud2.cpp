@@ -3,9 +3,11 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "byte_reader.hpp"
 #include "message_reader.hpp"
+#include "organized_rays.hpp"
 #include "lidarsurf/core/errors.hpp"
 
 namespace lidarsurf {
@@ -104,6 +106,9 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
     // The usual layout (float32 x, y, z in the host's byte order) is read without the general
     // loader's per-value dispatch.
     const bool float32_xyz = !m.big_endian && xyz[0]->datatype == 7 && xyz[1]->datatype == 7 && xyz[2]->datatype == 7;
+    // An organized cloud (beams by azimuths): where its empty rays point is found from its grid.
+    const bool organized = m.height > 1 && m.width > 1 && n <= std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> cells, empty_cells;
     for (std::uint32_t row = 0; row < m.height; ++row) {
         const auto* base = reinterpret_cast<const char*>(m.data.data()) + std::size_t{row} * m.row_step;
         for (std::uint32_t col = 0; col < m.width; ++col) {
@@ -121,8 +126,10 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
             const bool finite = std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
             if (!finite || (v.x() == 0 && v.y() == 0 && v.z() == 0)) {  // organized clouds mark a ray without return so
                 ++empty;
+                if (organized) empty_cells.push_back(row * m.width + col);
                 continue;
             }
+            if (organized) cells.push_back(row * m.width + col);
             scan.cloud.points.push_back(v);
             if (time) {
                 double t = detail::load_scalar(p + time->offset, scalar_type(time->datatype), m.big_endian) * time_scale;
@@ -135,6 +142,7 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
         }
     }
     if (no_returns) *no_returns = empty;
+    if (organized) scan.no_return = detail::organized_no_return_directions(m.height, m.width, scan.cloud.points, cells, empty_cells);
     return scan;
 }
 

@@ -275,6 +275,51 @@ TEST(PointCloud2, AnEmptyCloudOfBillionsOfRowsIsEmptyAtOnce) {
     EXPECT_THROW(decode_point_cloud2(m, "fuzz"), FormatError);
 }
 
+TEST(PointCloud2, AnOrganizedCloudsEmptyRaysPointWhereTheirBeamAndColumnLook) {
+    // 16 beams (elevation -15 + 2 b degrees, azimuth offsets of +-1.2 degrees) by 360 columns (one
+    // degree apart, turning clockwise from 90 degrees), as an organized cloud: NaN where a ray
+    // returned nothing (the sky above 7 degrees, and one ray in 5 below), zeros in two of them.
+    const std::uint32_t height = 16, width = 360;
+    const auto el = [](std::uint32_t b) { return (-15.0 + 2.0 * b) * M_PI / 180; };
+    const auto az = [](std::uint32_t b, std::uint32_t c) { return (90.0 - c + (b % 2 ? 1.2 : -1.2)) * M_PI / 180; };
+    const auto empty_at = [](std::uint32_t b, std::uint32_t c) { return b > 11 || (b * 7 + c) % 5 == 0; };
+    std::vector<std::uint8_t> data(std::size_t{height} * width * 12);
+    for (std::uint32_t b = 0; b < height; ++b) {
+        for (std::uint32_t c = 0; c < width; ++c) {
+            const double r = 10 + (b * 13 + c * 7) % 40;  // 10 to 49 m
+            float v[3] = {static_cast<float>(r * std::cos(el(b)) * std::cos(az(b, c))), static_cast<float>(r * std::cos(el(b)) * std::sin(az(b, c))),
+                          static_cast<float>(r * std::sin(el(b)))};
+            if (empty_at(b, c)) v[0] = v[1] = v[2] = (b + c) % 2 ? std::nanf("") : 0.0f;
+            std::memcpy(data.data() + (std::size_t{b} * width + c) * 12, v, sizeof v);
+        }
+    }
+    PointCloud2Message m;
+    m.height = height, m.width = width, m.point_step = 12, m.row_step = 12 * width;
+    m.fields = {{"x", 0, 7, 1}, {"y", 4, 7, 1}, {"z", 8, 7, 1}};
+    m.data = data;
+    std::size_t empty = 0;
+    const RecordedScan scan = decode_point_cloud2(m, "organized", &empty);
+    std::vector<Eigen::Vector3d> expected;
+    for (std::uint32_t b = 0; b < height; ++b)
+        for (std::uint32_t c = 0; c < width; ++c)
+            if (empty_at(b, c) && b <= 11)  // the sky's rows have no return to place them
+                expected.emplace_back(std::cos(el(b)) * std::cos(az(b, c)), std::cos(el(b)) * std::sin(az(b, c)), std::sin(el(b)));
+    ASSERT_EQ(scan.no_return.size(), expected.size());
+    EXPECT_GT(empty, expected.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+        const Eigen::Vector3d d = scan.no_return[i].cast<double>();
+        worst = std::max(worst, std::atan2(d.cross(expected[i]).norm(), d.dot(expected[i])));  // the angle between them
+    }
+    EXPECT_LT(worst, 1e-5);  // radians: float32 points
+    // The same points shuffled over the grid are no beams by azimuths: no direction is guessed.
+    std::vector<std::uint8_t> shuffled(data.size());
+    for (std::size_t i = 0; i < std::size_t{height} * width; ++i)
+        std::memcpy(shuffled.data() + 12 * ((i * 7919) % (std::size_t{height} * width)), data.data() + 12 * i, 12);
+    m.data = shuffled;
+    EXPECT_TRUE(decode_point_cloud2(m, "shuffled").no_return.empty());
+}
+
 // ---- The real Ouster recordings (the SDK's test data). ----
 
 fs::path shared_ouster() { return fs::path(LIDARSURF_SHARED_DATA) / "ouster"; }

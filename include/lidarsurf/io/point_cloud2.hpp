@@ -39,7 +39,8 @@ PointCloud2Message parse_ros1_point_cloud2(std::span<const std::uint8_t> bytes, 
 PointCloud2Message parse_cdr_point_cloud2(std::span<const std::uint8_t> bytes, const std::string& where);
 
 /// The points of a PointCloud2 (rays that returned nothing left out and counted in
-/// `no_returns`). Per-point times: Ouster `t` (uint32 ns), Velodyne `time` (float32 s after the
+/// `no_returns`; in an organized cloud of beams by azimuths, their directions are estimated from
+/// its rows and columns into RecordedScan::no_return). Per-point times: Ouster `t` (uint32 ns), Velodyne `time` (float32 s after the
 /// stamp), Livox `offset_time` (uint32 ns), Hesai `timestamp` (float64 absolute s); `times` holds
 /// them as seconds after the message's stamp. Throws FormatError when the sizes disagree with the
 /// data (width x height x point_step, row_step), a field lies outside point_step, x/y/z are

@@ -20,7 +20,9 @@ struct RecordedScan {
     /// does not say.
     std::vector<float> times;
     /// Unit directions (sensor frame) of the rays that returned nothing: an Ouster pixel of
-    /// range 0. Empty when the recording does not say which rays those were.
+    /// range 0, a Velodyne channel of range 0, an organized PointCloud2's NaN or zero point (its
+    /// direction from the cloud's rows and columns). Empty when the recording does not say which
+    /// rays those were.
     std::vector<Eigen::Vector3f> no_return;
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< where the rays start, sensor frame
     /// Fraction of the sweep's columns the recording holds (1: a whole revolution); a recording
