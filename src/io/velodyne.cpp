@@ -409,7 +409,7 @@ bool VelodyneSweeps::add(std::span<const std::uint8_t> packet, std::int64_t capt
             } else if (back >= 0) {
                 continue;  // a firing sent again, or out of order
             } else {
-                covered_ += -back;
+                covered_ += -back <= 200 ? -back : last_step_;  // a gap (packets lost) covers one step, not the gap
             }
         }
         last_azimuth_ = f.azimuth;

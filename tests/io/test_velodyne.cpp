@@ -115,6 +115,16 @@ TEST(VelodyneSweeps, ASweepEndsWhereTheAzimuthWrapsAndPartialSweepsSayHowPartial
     EXPECT_EQ(scans[1].stamp_ns - scans[0].stamp_ns, 1000 * std::lround(25 * 12 * 110.592));
     EXPECT_NEAR(scans[1].times.back(), (1799 * 110.592 + 55.296 + 15 * 2.304) * 1e-6, 1e-6);
     for (std::size_t s = 0; s < 3; ++s) EXPECT_EQ(scans[s].index, s);
+
+    // 50 packets lost mid-revolution (120 degrees): that sweep covers two thirds of a turn.
+    VelodyneSweeps lossy(VelodyneModel::VLP16, *velodyne_factory_calibration(VelodyneModel::VLP16));
+    scans.clear();
+    for (std::size_t k = 0; k < packets.size(); ++k) {
+        if (k >= 100 && k < 150) continue;
+        if (lossy.add(packets[k], 0, "test")) scans.push_back(lossy.take());
+    }
+    ASSERT_EQ(scans.size(), 2u);
+    EXPECT_NEAR(scans[1].completeness, 2.0 / 3, 1e-9);
 }
 
 TEST(VelodyneSweeps, DualReturnsKeepTheFirstBlockOrBothWithoutRepeats) {
