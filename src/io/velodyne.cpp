@@ -267,6 +267,12 @@ double Timing::channel_us(int j) const {
     return 0;
 }
 
+// The laser that channel j of a block of `bank` (0: 0xEEFF, 1: 0xDDFF) fires: the VLP-16 fires its
+// 16 lasers twice a block.
+std::size_t laser_of(VelodyneModel m, std::size_t bank, std::size_t j) {
+    return bank * kChannels + (m == VelodyneModel::VLP16 || m == VelodyneModel::VLP16HiRes ? j % 16 : j);
+}
+
 Timing timing_of(VelodyneModel m) {
     switch (m) {
         case VelodyneModel::VLP16: case VelodyneModel::VLP16HiRes: return {110.592, m};
@@ -432,7 +438,7 @@ const std::array<double, 2>* VelodyneSweeps::advance(int step) {
         const Timing timing = timing_of(model_);
         for (std::size_t bank = 0; bank < 2; ++bank) {
             for (std::size_t j = 0; j < kChannels; ++j) {
-                std::size_t laser = bank * kChannels + (model_ == VelodyneModel::VLP16 || model_ == VelodyneModel::VLP16HiRes ? j % 16 : j);
+                std::size_t laser = laser_of(model_, bank, j);
                 if (laser >= cal_.lasers.size()) laser = 0;  // no such bank on this model
                 const double advance = timing.group_us > 0 ? step * timing.channel_us(static_cast<int>(j)) / timing.group_us : 0.0;
                 const double delta = advance * (M_PI / 18000) - cal_.lasers[laser].rot_correction;
@@ -456,7 +462,7 @@ void VelodyneSweeps::add_firing(const Firing& f) {
         if (ret > 0 && returns_ == VelodyneReturns::First) continue;
         const std::uint8_t* block = f.blocks[k];
         for (std::size_t j = 0; j < kChannels; ++j) {
-            const std::size_t laser = bank * kChannels + (model_ == VelodyneModel::VLP16 || model_ == VelodyneModel::VLP16HiRes ? j % 16 : j);
+            const std::size_t laser = laser_of(model_, bank, j);
             const auto raw = get_le<std::uint16_t>(block + 4 + 3 * j);
             const double t_us = f.start_us + timing.channel_us(static_cast<int>(j));
             const VelodyneLaser& l = cal_.lasers[laser];
