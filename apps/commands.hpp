@@ -3,6 +3,7 @@
 // Errors are thrown as lidarsurf exceptions; main() maps them to exit codes.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
 #include "lidarsurf/io/recorded_drive.hpp"
+#include "lidarsurf/map/empty_rays.hpp"
 #include "lidarsurf/tiles/tiles.hpp"
 #include "lidarsurf/eval/map_metrics.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -60,7 +62,7 @@ struct SimulateOptions {
     std::string scene = "town", sensor = "hdl64", output, gt, from, to;
     bool gt_given = false;  // --gt given, even with an empty name (an error)
     bool quiet = false;     // no progress report
-    int frames = 100, gt_beams = 316, moving_cars = 3, pedestrians = 0, cyclists = 0, leaving_cars = 0, parking_cars = 0;
+    int frames = 100, gt_beams = 316, moving_cars = 3, pedestrians = 0, cyclists = 0, leaving_cars = 0, parking_cars = 0, dark_cars = 0;
     double length = 240.0, speed = 8.0, weave = 0.0, sweep_seconds = 0.0;
     std::uint64_t seed = 1;
 };
@@ -125,6 +127,7 @@ struct FuseInput {
         SequencePoses where;
         std::vector<Eigen::Isometry3d> poses;
         std::shared_ptr<RecordedDrive> recording;  // a recording's drive: scans read from it, in order
+        std::optional<BeamPattern> pattern;         // a simulated drive's sensor (sensor.json): its rays that returned nothing
     };
     struct Scan {
         std::size_t drive = 0, frame = 0;
@@ -134,11 +137,10 @@ struct FuseInput {
     MeshFormat format = MeshFormat::Auto;
 
     const Eigen::Isometry3d& pose(std::size_t n) const { return drives[scans[n].drive].poses[scans[n].frame]; }
-    /// Scan n in the world frame.
-    PointCloud read(std::size_t n, const PointReadOptions& options) const {
-        const Drive& d = drives[scans[n].drive];
-        return d.recording ? d.recording->world_scan(scans[n].frame) : read_world_scan(d.seq, scans[n].frame, pose(n), options);
-    }
+    /// Scan n in the world frame; `no_return`, when given, receives the directions (world) of its
+    /// rays that returned nothing, from the recording or the drive's sensor pattern (empty when
+    /// neither says).
+    PointCloud read(std::size_t n, const PointReadOptions& options, std::vector<Eigen::Vector3f>* no_return = nullptr) const;
     /// "000042", or "2:000042" (drive 2) with several drives.
     std::string label(std::size_t n) const;
     /// The drives' directories, and where their poses came from, for reports.

@@ -22,6 +22,8 @@
 #include "viewer_page.hpp"
 #include "lidarsurf/io/kitti_sequence.hpp"
 #include "lidarsurf/io/mesh_writer.hpp"
+#include "lidarsurf/io/point_reader.hpp"
+#include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/tiles/tile_writer.hpp"
 #include "lidarsurf/eval/live_staleness.hpp"
 #include "lidarsurf/eval/metrics.hpp"
@@ -109,6 +111,22 @@ std::string FuseInput::label(std::size_t n) const {
     return drives.size() > 1 ? std::to_string(scans[n].drive + 1) + ":" + frame : frame;
 }
 
+PointCloud FuseInput::read(std::size_t n, const PointReadOptions& options, std::vector<Eigen::Vector3f>* no_return) const {
+    const Drive& d = drives[scans[n].drive];
+    if (d.recording) return d.recording->world_scan(scans[n].frame, no_return);
+    PointCloud cloud = read_points(d.seq.scan(scans[n].frame), options);
+    if (no_return) {
+        no_return->clear();
+        if (d.pattern) {
+            const Eigen::Matrix3f turn = pose(n).linear().cast<float>();
+            *no_return = empty_rays(*d.pattern, cloud.points);
+            for (Eigen::Vector3f& u : *no_return) u = turn * u;
+        }
+    }
+    for (Eigen::Vector3d& p : cloud.points) p = pose(n) * p;  // NaN stays NaN
+    return cloud;
+}
+
 std::string FuseInput::name() const {
     std::string out;
     for (const Drive& d : drives) out += (out.empty() ? "" : " + ") + d.seq.dir.string();
@@ -151,7 +169,7 @@ FuseInput::Drive read_recorded_drive(const FuseOptions& o, const std::string& pa
     files.input(path);
     if (!from_bag) files.input(o.poses);
     if (!o.times.empty()) files.input(o.times);
-    FuseInput::Drive d{KittiSequence{path}, {}, {}, drive};
+    FuseInput::Drive d{KittiSequence{path}, {}, {}, drive, std::nullopt};
     d.where.poses = from_bag ? path : o.poses;
     d.where.layout = source + " (" + std::to_string(drive->size()) + " of " + std::to_string(drive->recorded()) + " scans within its span" +
                      (drive->deskews() ? ", de-skewed" : "") + ")";
@@ -173,13 +191,15 @@ FuseInput read_fuse_input(const FuseOptions& o) {
             for (std::size_t i : select_frames(available, o.first, o.frames, o.step, dir)) in.scans.push_back({in.drives.size() - 1, i});
             continue;
         }
-        FuseInput::Drive d{KittiSequence{dir}, {}, {}, {}};
+        FuseInput::Drive d{KittiSequence{dir}, {}, {}, {}, std::nullopt};
         const std::size_t available = d.seq.frame_count();  // IoError when there is no velodyne/
         d.where = find_sequence_poses(d.seq.dir, o.poses, o.calib);
         d.poses = read_sequence_poses(d.where);
         if (d.poses.size() < available)
             throw InvalidInput(d.where.poses.string() + ": " + std::to_string(d.poses.size()) + " poses for " + std::to_string(available) + " scans");
         for (std::size_t i : select_frames(available, o.first, o.frames, o.step, dir)) in.scans.push_back({in.drives.size(), i});
+        d.pattern = sim::drive_pattern(d.seq.sensor());  // a simulated drive: its sensor says which rays returned nothing
+        if (d.pattern) files.input(d.seq.sensor());
         files.input_sequence(d.seq.dir);
         files.input(d.where.poses);
         if (!d.where.calib.empty()) files.input(d.where.calib);
@@ -246,13 +266,13 @@ public:
     void scan(std::size_t n) {
         const std::size_t count = in_.scans.size();
         auto t0 = std::chrono::steady_clock::now();
-        const PointCloud cloud = in_.read(n, m_.read);  // NaN stays NaN: integrate drops it
+        const PointCloud cloud = in_.read(n, m_.read, m_.config.carve && m_.config.carve_empty_range > 0 ? &no_return_ : nullptr);  // NaN stays NaN: integrate drops it
         const Eigen::Isometry3d& pose = in_.pose(n);
         read_ms_ += ms_since(t0);
-        if (by_tiles()) reaches_.push_back(scan_reach(cloud.points, pose * m_.sensor));
+        if (by_tiles()) reaches_.push_back(scan_reach(cloud.points, pose * m_.sensor, !no_return_.empty()));
         const double before = rec_.summary().seconds_insert + rec_.summary().seconds_carve;
         const auto t_update = std::chrono::steady_clock::now();
-        rec_.integrate(cloud.points, pose * m_.sensor);
+        rec_.integrate(cloud.points, pose * m_.sensor, no_return_);
         nlohmann::json row = {{"frame", in_.scans[n].frame},
                               {"drive", in_.scans[n].drive},
                               {"integrate_ms", 1e3 * (rec_.summary().seconds_insert + rec_.summary().seconds_carve - before)},
@@ -415,6 +435,7 @@ private:
     Mesh mesh_;
     bool fresh_ = false;  // whether mesh_ holds every frame fused so far
     double read_ms_ = 0, write_ms_ = 0;
+    std::vector<Eigen::Vector3f> no_return_;  // the scan's rays that returned nothing (world directions)
     nlohmann::json per_frame_ = nlohmann::json::array();
     std::vector<double> update_times_, stale_shares_;
     ReconstructionSummary summary_;

@@ -21,13 +21,20 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     std::FILE* const report = report_stream(o.output);
     const auto start = std::chrono::steady_clock::now();
     // Scan n of the fusion (frame in.frames[n]) in the world frame, and where it was seen from.
-    const auto read_scan = [&](std::size_t n) { return in.read(n, m.read).points; };  // NaN stays NaN: no tile keeps it
+    // and the directions of its rays that returned nothing (when carving takes them).
+    const bool empty_rays = m.config.carve && m.config.carve_empty_range > 0;
+    const auto read_scan = [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) {
+        return in.read(n, m.read, empty_rays ? &no_return : nullptr).points;  // NaN stays NaN: no tile keeps it
+    };
     std::vector<ScanReach> reach;
     reach.reserve(in.scans.size());
     {
         Progress progress("fuse: plan", "frames", in.scans.size(), o.quiet);
+        std::vector<Eigen::Vector3f> no_return;
         for (std::size_t n = 0; n < in.scans.size(); ++n) {
-            reach.push_back(scan_reach(read_scan(n), in.pose(n) * m.sensor));
+            no_return.clear();
+            const std::vector<Eigen::Vector3d> points = read_scan(n, no_return);
+            reach.push_back(scan_reach(points, in.pose(n) * m.sensor, !no_return.empty()));
             progress.update(n + 1);
         }
         progress.finish();

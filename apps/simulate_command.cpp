@@ -81,6 +81,7 @@ sim::World load_world(const SimulateOptions& o) {
     sc.cyclists = o.cyclists;
     sc.leaving_cars = o.leaving_cars;
     sc.parking_cars = o.parking_cars;
+    sc.dark_cars = o.dark_cars;
     sc.ego_speed = o.speed;
     sc.weave = o.weave;
     return sim::make_world(sc);
@@ -137,7 +138,7 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
         "  lidarsurf simulate --scene demo -o scan.bin --gt gt.bin   (the analytic test scene)\n"
         "A directory gets velodyne/NNNNNN.bin (sensor frame), gt/NNNNNN.bin (co-located noise-free\n"
         "ground-truth sensor), poses.txt (sensor-to-world, 3x4 row-major), scene.ply, objects/NNNNNN.ply\n"
-        "(moving cars at each frame's time) and sensor.json. A point file gets one scan (mid-drive).\n");
+        "(moving cars at each frame's time), sensor.json and, with --dark-cars, dark.ply (the surfaces that return no ray). A point file gets one scan (mid-drive).\n");
     sc->add_option("--scene", o.scene, "town | offroad | demo | a .ply/.obj scene mesh")->capture_default_str();
     sc->add_option("--sensor", o.sensor, "hdl64 | vlp16 | hdl32 | os1-128 | gt316 | a .json sensor file")->capture_default_str();
     sc->add_option("--frames", o.frames, "Frames, equi-sampled along the drive")->capture_default_str();
@@ -153,6 +154,7 @@ CLI::App* add_simulate_command(CLI::App& app, SimulateOptions& o) {
     sc->add_option("--cyclists", o.cyclists, "Cyclists riding beside the opposite lane (town)")->capture_default_str();
     sc->add_option("--leaving-cars", o.leaving_cars, "Cars parked at the curb that drive off mid-drive (town)")->capture_default_str();
     sc->add_option("--parking-cars", o.parking_cars, "Cars that drive in and park at the curb mid-drive (town)")->capture_default_str();
+    sc->add_option("--dark-cars", o.dark_cars, "Cars parked all along whose hull is too dark to return a ray (town)")->capture_default_str();
     sc->add_option("--speed", o.speed, "Speed of the sensor rig along the drive, m/s (sets the frame times)")->capture_default_str();
     sc->add_option("--weave", o.weave, "Town: the drive weaves this many metres to either side of its lane (a 40 m sine; 0 = straight)")
         ->capture_default_str();
@@ -207,6 +209,8 @@ int run_simulate(const SimulateOptions& o) {
     // it, cars that parked are).
     write_mesh(simulator.world().standing_at(simulator.world().time_at(1.0)), seq.scene());
     write_text(seq.sensor().string(), cfg.sensor.to_json());
+    // The surfaces that return no ray (--dark-cars), part of scene.ply too.
+    if (!simulator.world().dark_mesh.triangles.empty()) write_mesh(simulator.world().dark_mesh, seq.dir / "dark.ply");
     std::vector<Eigen::Isometry3d> poses;
     std::vector<double> frame_times;
     std::size_t points = 0;

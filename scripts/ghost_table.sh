@@ -7,6 +7,7 @@
 # Usage: ghost_table.sh LIDARSURF_CLI OUT_DIR [VDBFUSION_PEER]
 #   DRIVES_DIR (default OUT_DIR/drives): where the drives are simulated, once, and reused by later runs
 #   DRIVES: "name:seed:simulate options;..." (default: the set below); ROWS (default: default,no-carving[,vdbfusion-carving])
+#   FUSE_OPTIONS: more options for the lidarsurf rows (map-benchmark --fuse-options), one string
 set -euo pipefail
 cli=$(realpath "$1") out=$2 peer=${3:-}
 drives_dir=${DRIVES_DIR:-$out/drives}
@@ -23,20 +24,21 @@ for d in "${list[@]}"; do
   # shellcheck disable=SC2086  # the options are words
   [ -d "$dir/velodyne" ] || "$cli" simulate --frames 150 --seed "$seed" $opts -o "$dir" --quiet >/dev/null
   rm -rf "$out/$name-$seed"
-  "$cli" map-benchmark "$dir" --rows "$rows" ${peer:+--vdbfusion "$peer"} --out "$out/$name-$seed" -q >/dev/null
+  "$cli" map-benchmark "$dir" --rows "$rows" ${peer:+--vdbfusion "$peer"} ${FUSE_OPTIONS:+--fuse-options "$FUSE_OPTIONS"} \
+    --out "$out/$name-$seed" -q >/dev/null
 done
 /usr/bin/python3 - "$out" "$drives" <<'PY'
 import json, os, sys
 out, drives = sys.argv[1], [d for d in sys.argv[2].split(";") if d]
-rows, table = [], ["| drive | seed | method | ghost share | ghost area | F@0.1 | recall | precision | insert + carve / scan |",
-                   "|---|---|---|---|---|---|---|---|---|"]
+rows, table = [], ["| drive | seed | method | ghost share | ghost area | on the movers' paths | F@0.1 | recall | precision | insert + carve / scan |",
+                   "|---|---|---|---|---|---|---|---|---|---|"]
 for d in drives:
     name, seed, opts = d.split(":", 2)
     results = json.load(open(os.path.join(out, f"{name}-{seed}", "results.json")))
     for r in results["rows"]:
         rows.append({"drive": name, "seed": int(seed), "options": opts.strip(), **{k: r[k] for k in
-                     ("row", "label", "ghost_share", "ghost_area", "fscore", "recall", "precision", "integrate_ms_per_scan")}})
-        table.append(f"| {name} | {seed} | {r['label']} | {100 * r['ghost_share']:.2f} % | {r['ghost_area']:.0f} m² | "
+                     ("row", "label", "ghost_share", "ghost_area", "path_ghost_area", "fscore", "recall", "precision", "integrate_ms_per_scan")}})
+        table.append(f"| {name} | {seed} | {r['label']} | {100 * r['ghost_share']:.2f} % | {r['ghost_area']:.0f} m² | {r['path_ghost_area']:.1f} m² | "
                      f"{100 * r['fscore']:.1f} % | {100 * r['recall']:.1f} % | {100 * r['precision']:.1f} % | {r['integrate_ms_per_scan']:.1f} ms |")
 json.dump(rows, open(os.path.join(out, "ghosts.json"), "w"), indent=1)
 print("\n".join(table))

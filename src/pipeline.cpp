@@ -57,24 +57,30 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
 }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint) {
-    integrate_seen(points, viewpoint, points);
+    integrate_seen(points, viewpoint, points, {});
 }
 
-void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep) {
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint,
+                              std::span<const Eigen::Vector3f> no_return) {
+    integrate_seen(points, viewpoint, points, no_return);
+}
+
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
+                              std::span<const Eigen::Vector3f> no_return) {
     std::vector<Eigen::Vector3d> kept;
     for (const Eigen::Vector3d& p : points)
         if (keep.contains(p)) kept.push_back(p);  // a non-finite point is in no box
-    integrate_seen(kept, viewpoint, points);  // summary().points_read counts the points kept
+    integrate_seen(kept, viewpoint, points, no_return);  // summary().points_read counts the points kept
 }
 
 void Reconstructor::integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint,
-                                   std::span<const Eigen::Vector3d> scan) {
+                                   std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return) {
     if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
     if (!grid_.has_viewpoints()) {
         grid_.enable_viewpoints(sensor_);  // the points integrated before were seen from the sensor
         if (grid_.point_count() > 0) previous_.reset();  // every orientation may change: evaluate all again
     }
-    add(points, viewpoint, scan);
+    add(points, viewpoint, scan, no_return);
     last_viewpoint_ = viewpoint;
 }
 
@@ -98,7 +104,7 @@ MeshDelta Reconstructor::update_mesh(double budget_ms) {
 }
 
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
-                        std::span<const Eigen::Vector3d> scan) {
+                        std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return) {
     const auto t0 = std::chrono::steady_clock::now();
     // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points):
     // a frame cut in two chunks paid two groupings and two parallel updates (0.6-0.8 ms).
@@ -141,7 +147,7 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     summary_.seconds_insert += seconds_since(t0);
     if (carving) {
         const auto t1 = std::chrono::steady_clock::now();
-        const CarvingStats carved = arena.execute([&] { return carver_->carve(grid_, scan, hits, *seen_from); });
+        const CarvingStats carved = arena.execute([&] { return carver_->carve(grid_, scan, hits, *seen_from, no_return); });
         summary_.carved_voxels += carved.removed;
         summary_.seconds_carve += seconds_since(t1);
     }

@@ -72,10 +72,14 @@ public:
     /// as seen from the constructor's sensor. Turning them on after points were integrated makes
     /// the next extraction evaluate every vertex again. Throws InvalidArgument if not finite.
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
+    /// The same, with the unit directions (world frame) of the scan's rays that returned nothing:
+    /// free-space carving takes them as free space up to config.carve_empty_range.
+    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3f> no_return);
     /// A part of a map (tiles/tiles.hpp): of the scan's points seen from `viewpoint`, only those
     /// inside `keep` (world) are integrated, while free-space carving takes the whole scan (a ray
     /// through the part may return outside it). summary().points_read counts the points kept.
-    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep);
+    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
+                   std::span<const Eigen::Vector3f> no_return = {});
     /// A scan of a sequence that reaches nothing of this grid (a part of a map, tiles/tiles.hpp):
     /// free-space carving counts it, as it counts every scan of the drive.
     void skip_scan();
@@ -120,10 +124,12 @@ public:
 
 private:
     /// integrate(points, viewpoint) of `points`, taken from the whole scan `scan` (carving sees it).
-    void integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3d> scan);
-    /// Inserts `points`; carving (on) sees `scan`, the whole scan they are taken from.
+    void integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3d> scan,
+                        std::span<const Eigen::Vector3f> no_return);
+    /// Inserts `points`; carving (on) sees `scan`, the whole scan they are taken from, and its rays
+    /// that returned nothing.
     void add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
-             std::span<const Eigen::Vector3d> scan);
+             std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return = {});
     void ensure_carver();
     double budget_bytes() const;
     std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;

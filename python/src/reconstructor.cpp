@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lidarsurf/core/errors.hpp"
+#include "lidarsurf/map/empty_rays.hpp"
 #include "lidarsurf/pipeline.hpp"
 #include "numpy_views.hpp"
 
@@ -30,6 +31,27 @@ struct SharedReconstructor {
 }  // namespace
 
 void bind_reconstructor(py::module_& m) {
+    m.def(
+        "empty_rays",
+        [](const py::handle& points, const std::vector<double>& elevations_deg, double azimuth_step_deg) {
+            const PointArray view = points_view(points, "points");
+            std::vector<Eigen::Vector3f> rays;
+            {
+                py::gil_scoped_release release;
+                rays = empty_rays(BeamPattern{elevations_deg, azimuth_step_deg}, as_span(view));
+            }
+            py::array_t<float> out({static_cast<py::ssize_t>(rays.size()), py::ssize_t{3}});
+            auto a = out.mutable_unchecked<2>();
+            for (std::size_t i = 0; i < rays.size(); ++i)
+                for (py::ssize_t c = 0; c < 3; ++c) a(static_cast<py::ssize_t>(i), c) = rays[i][c];
+            return out;
+        },
+        py::arg("points"), py::arg("elevations_deg"), py::arg("azimuth_step_deg"),
+        "The unit directions (an (M, 3) float32 array, sensor frame) of the rays of a spinning lidar's pattern (beams at "
+        "`elevations_deg`, fired every `azimuth_step_deg` from azimuth 0) that none of `points` (an (N, 3) array of returns "
+        "in the sensor frame) fell in: what Reconstructor.integrate_from takes as `no_return`, once turned into the world "
+        "frame. A drive `lidarsurf simulate` wrote has its sensor's pattern in sensor.json. Raises ValueError for no beam or "
+        "a step outside (0, 360].");
     py::class_<SharedReconstructor>(m, "Reconstructor",
                               "A reconstruction that accepts more points: integrate() scans or parts of scans seen from the same "
                               "origin, extract_mesh() whenever a mesh is needed. Each extraction re-evaluates only the vertices the "
@@ -54,17 +76,25 @@ void bind_reconstructor(py::module_& m) {
             "Raises MemoryError past the memory budget.")
         .def(
             "integrate_from",
-            [](SharedReconstructor& self, const py::handle& points, const std::vector<double>& viewpoint) {
+            [](SharedReconstructor& self, const py::handle& points, const std::vector<double>& viewpoint, const py::handle& no_return) {
                 const PointArray view = points_view(points, "points");
                 const Eigen::Vector3d seen_from = as_vec3(viewpoint, "viewpoint");
+                std::vector<Eigen::Vector3f> empty;
+                if (!no_return.is_none()) {
+                    const PointArray rays = points_view(no_return, "no_return");
+                    empty.reserve(static_cast<std::size_t>(rays.shape(0)));
+                    for (const Eigen::Vector3d& u : as_span(rays)) empty.push_back(u.cast<float>());
+                }
                 py::gil_scoped_release release;
                 const std::lock_guard lock(self.mutex);
-                self.rec.integrate(as_span(view), seen_from);
+                self.rec.integrate(as_span(view), seen_from, empty);
             },
-            py::arg("points"), py::arg("viewpoint"),
+            py::arg("points"), py::arg("viewpoint"), py::arg("no_return") = py::none(),
             "Add points seen from `viewpoint` (same frame, e.g. world points and the pose's translation): for sequences. "
             "The first call turns on per-voxel viewpoints, so each part of the surface is oriented toward where it was "
-            "seen from; points added by integrate() count as seen from the origin.")
+            "seen from; points added by integrate() count as seen from the origin. `no_return`: an (M, 3) array of the "
+            "directions (same frame) of the scan's rays that returned nothing, which carving takes as free space up to "
+            "Config.carve_empty_range.")
         .def(
             "extract_mesh",
             [](SharedReconstructor& self) {

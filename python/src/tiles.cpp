@@ -13,6 +13,7 @@
 #include "lidarsurf/io/point_reader.hpp"
 #include "lidarsurf/io/recorded_drive.hpp"
 #include "lidarsurf/io/recorded_poses.hpp"
+#include "lidarsurf/sim/sensor_model.hpp"
 #include "lidarsurf/tiles/tiles.hpp"
 #include "lidarsurf/pipeline.hpp"
 
@@ -21,8 +22,9 @@ namespace py = pybind11;
 namespace lidarsurf {
 namespace {
 
-// One row per scan: viewpoint (3), radius, box min (3), box max (3), has a first point, first point (3).
-constexpr py::ssize_t kReachColumns = 14;
+// One row per scan: viewpoint (3), radius, box min (3), box max (3), has a first point, first point (3),
+// whether it says which rays returned nothing.
+constexpr py::ssize_t kReachColumns = 15;
 
 // How a recording's scans are found: the trajectory (a TUM or KITTI file with its times, or
 // "recording": the bag's /tf or pose_topic), the scans' topic and the Ouster metadata or Velodyne
@@ -65,10 +67,12 @@ struct RecordingSource {
 
 // The sequence's scans `frames` in the world frame: a KITTI layout (poses as `lidarsurf fuse`
 // finds them), or a recording's scans within its trajectory's span, de-skewed (as `fuse` takes
-// them), read in order (the recording streamed).
+// them), read in order (the recording streamed); with the rays that returned nothing as `fuse`
+// finds them (the recording's, or a simulated drive's sensor pattern).
 struct Sequence {
     std::optional<KittiSequence> seq;
     std::optional<RecordedDrive> drive;
+    std::optional<BeamPattern> pattern;
     std::vector<Eigen::Isometry3d> poses;
     std::vector<std::size_t> frames;
 
@@ -82,15 +86,28 @@ struct Sequence {
             seq.emplace(KittiSequence{dir});
             available = seq->frame_count();
             poses = read_sequence_poses(find_sequence_poses(seq->dir, {}, {}));
+            pattern = sim::drive_pattern(seq->sensor());
         }
         for (std::size_t i : frames)
             if (i >= available || i >= poses.size())
                 throw InvalidArgument(dir + ": frame " + std::to_string(i) + " has no scan or no pose (" + std::to_string(available) +
                                       " scans, " + std::to_string(poses.size()) + " poses)");
     }
-    std::vector<Eigen::Vector3d> scan(std::size_t n) {
-        if (drive) return drive->world_scan(frames[n]).points;
-        return read_world_scan(*seq, frames[n], poses[frames[n]]).points;
+    /// `no_return`, when given, receives the directions (world) of its rays that returned nothing.
+    std::vector<Eigen::Vector3d> scan(std::size_t n, std::vector<Eigen::Vector3f>* no_return = nullptr) {
+        if (drive) return drive->world_scan(frames[n], no_return).points;
+        PointCloud cloud = read_points(seq->scan(frames[n]));
+        const Eigen::Isometry3d& pose = poses[frames[n]];
+        if (no_return) {
+            no_return->clear();
+            if (pattern) {
+                *no_return = empty_rays(*pattern, cloud.points);
+                const Eigen::Matrix3f turn = pose.linear().cast<float>();
+                for (Eigen::Vector3f& u : *no_return) u = turn * u;
+            }
+        }
+        for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN
+        return std::move(cloud.points);
     }
     Eigen::Vector3d viewpoint(std::size_t n) const { return drive ? Eigen::Vector3d(poses[frames[n]] * drive->origin()) : poses[frames[n]].translation(); }
 };
@@ -105,7 +122,7 @@ py::array_t<double> reaches_array(const std::vector<ScanReach>& reaches) {
         const Eigen::Vector3d hi = r.box.isEmpty() ? Eigen::Vector3d::Zero() : r.box.max();
         const Eigen::Vector3d first = r.first_point.value_or(Eigen::Vector3d::Zero());
         const double v[kReachColumns] = {r.viewpoint.x(), r.viewpoint.y(), r.viewpoint.z(), r.radius, lo.x(), lo.y(), lo.z(), hi.x(), hi.y(),
-                                         hi.z(), r.first_point ? 1.0 : 0.0, first.x(), first.y(), first.z()};
+                                         hi.z(), r.first_point ? 1.0 : 0.0, first.x(), first.y(), first.z(), r.empty_rays ? 1.0 : 0.0};
         for (py::ssize_t c = 0; c < kReachColumns; ++c) a(row, c) = v[c];
     }
     return out;
@@ -120,6 +137,7 @@ std::vector<ScanReach> reaches_from(const py::array_t<double, py::array::c_style
         ScanReach& r = out[static_cast<std::size_t>(i)];
         r.viewpoint = {a(i, 0), a(i, 1), a(i, 2)};
         r.radius = a(i, 3);
+        r.empty_rays = a(i, 14) != 0;
         if (a(i, 10) != 0) {
             r.box = Eigen::AlignedBox3d(Eigen::Vector3d(a(i, 4), a(i, 5), a(i, 6)), Eigen::Vector3d(a(i, 7), a(i, 8), a(i, 9)));
             r.first_point = Eigen::Vector3d(a(i, 11), a(i, 12), a(i, 13));
@@ -175,20 +193,25 @@ void bind_tiles(py::module_& m) {
 
     m.def(
         "sequence_reaches",
-        [](const std::string& sequence, const std::vector<std::size_t>& frames, const py::object& recording) {
+        [](const std::string& sequence, const std::vector<std::size_t>& frames, const py::object& recording, bool empty_rays) {
             std::vector<ScanReach> reaches;
             const auto source = RecordingSource::from(recording);
             {
                 py::gil_scoped_release release;
                 Sequence s(sequence, frames, source);
-                for (std::size_t n = 0; n < frames.size(); ++n) reaches.push_back(scan_reach(s.scan(n), s.viewpoint(n)));
+                std::vector<Eigen::Vector3f> no_return;
+                for (std::size_t n = 0; n < frames.size(); ++n) {
+                    const std::vector<Eigen::Vector3d> points = s.scan(n, empty_rays ? &no_return : nullptr);
+                    reaches.push_back(scan_reach(points, s.viewpoint(n), empty_rays && !no_return.empty()));
+                }
             }
             return reaches_array(reaches);
         },
-        py::arg("sequence"), py::arg("frames"), py::arg("recording") = py::none(),
+        py::arg("sequence"), py::arg("frames"), py::arg("recording") = py::none(), py::arg("empty_rays") = true,
         "The reach of each scan `frames` of a sequence (KITTI layout, poses as `lidarsurf fuse` finds them; a recording "
-        "with `recording`, as sequence_frames takes it): an (N, 14) "
-        "array, one row per scan (viewpoint, farthest return, box of its points, its first point), what a TilePlan is made "
+        "with `recording`, as sequence_frames takes it): an (N, 15) "
+        "array, one row per scan (viewpoint, farthest return, box of its points, its first point, whether it says which rays "
+        "returned nothing: a recording's, a simulated drive's sensor.json; looked for unless `empty_rays` is False), what a TilePlan is made "
         "of. Reading a sequence's scans once, in pieces on many workers if it is long.");
 
     py::class_<TilePlan>(m, "TilePlan",
@@ -228,7 +251,10 @@ void bind_tiles(py::module_& m) {
                 const TilePlan plan(std::move(r), config, tiles);
                 if (plan.scan_count() != frames.size()) throw InvalidArgument("fuse_tile: one reach per frame");
                 Sequence seq(sequence, frames, source);
-                const Mesh mesh = fuse_tile(plan, {tile.first, tile.second}, [&](std::size_t n) { return seq.scan(n); }, &s);
+                const bool empty_rays = config.carve && config.carve_empty_range > 0;
+                const Mesh mesh = fuse_tile(
+                    plan, {tile.first, tile.second},
+                    [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) { return seq.scan(n, empty_rays ? &no_return : nullptr); }, &s);
                 triangles = mesh.triangles.size(), vertices = mesh.vertices.size();
                 if (!output.empty() && triangles > 0) write_mesh(mesh, output);
             }

@@ -83,8 +83,49 @@ std::vector<Eigen::Vector3d> MapGroundTruth::points() const {
     return out;
 }
 
+SweptVolume::SweptVolume(double pad) : pad_(pad) {
+    if (!(pad >= 0) || !std::isfinite(pad)) throw InvalidArgument("swept volume: the pad must be finite and >= 0");
+}
+
+std::uint64_t SweptVolume::cell_key(long x, long y) const {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32) | static_cast<std::uint32_t>(y);
+}
+
+void SweptVolume::add(const Mesh& movers) {
+    // Connected components by shared vertices (union-find), a box each.
+    std::vector<std::uint32_t> parent(movers.vertices.size());
+    for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+    const auto root = [&](std::uint32_t v) {
+        while (parent[v] != v) v = parent[v] = parent[parent[v]];
+        return v;
+    };
+    for (const auto& t : movers.triangles)
+        for (int e = 1; e < 3; ++e) parent[root(t[e])] = root(t[0]);
+    std::unordered_map<std::uint32_t, Eigen::AlignedBox3d> parts;
+    for (const auto& t : movers.triangles)
+        for (int e = 0; e < 3; ++e) parts[root(t[0])].extend(movers.vertices[t[e]]);
+    for (auto& [r, box] : parts) {
+        if (!box.min().allFinite() || !box.max().allFinite()) continue;
+        box.min().array() -= pad_;
+        box.max().array() += pad_;
+        const auto id = static_cast<std::uint32_t>(boxes_.size());
+        boxes_.push_back(box);
+        for (long x = static_cast<long>(std::floor(box.min().x() / kCell)); x <= static_cast<long>(std::floor(box.max().x() / kCell)); ++x)
+            for (long y = static_cast<long>(std::floor(box.min().y() / kCell)); y <= static_cast<long>(std::floor(box.max().y() / kCell)); ++y)
+                cells_[cell_key(x, y)].push_back(id);
+    }
+}
+
+bool SweptVolume::contains(const Eigen::Vector3d& p) const {
+    const auto it = cells_.find(cell_key(static_cast<long>(std::floor(p.x() / kCell)), static_cast<long>(std::floor(p.y() / kCell))));
+    if (it == cells_.end()) return false;
+    for (const std::uint32_t b : it->second)
+        if (boxes_[b].contains(p)) return true;
+    return false;
+}
+
 MapMetrics evaluate_map(const Mesh& mesh, const MeshDistance& truth, const std::vector<Eigen::Vector3d>& gt_in, const DriveCrop& crop,
-                        const MapEvaluationConfig& config) {
+                        const MapEvaluationConfig& config, const SweptVolume* swept) {
     config.validate();
     mesh.check();
     if (mesh.triangles.empty()) throw InvalidInput("the map to evaluate has no triangle");
@@ -116,11 +157,13 @@ MapMetrics evaluate_map(const Mesh& mesh, const MeshDistance& truth, const std::
         const std::vector<double> to_truth = distances_to_surface(truth, samples);
         const std::vector<double> to_mesh = distances_to_surface(MeshDistance(mesh), gt);
         double acc = 0, comp = 0;
-        std::size_t precise = 0, recalled = 0, ghosts = 0;
-        for (double d : to_truth) {
+        std::size_t precise = 0, recalled = 0, ghosts = 0, path_ghosts = 0;
+        for (std::size_t i = 0; i < to_truth.size(); ++i) {
+            const double d = to_truth[i];
             acc += std::min(d, config.truncation_accuracy);
             precise += d <= config.threshold;
             ghosts += d > config.ghost_distance;
+            path_ghosts += d > config.ghost_distance && swept && swept->contains(samples[i]);
         }
         for (double d : to_mesh) {
             comp += std::min(d, config.truncation_completeness);
@@ -133,6 +176,7 @@ MapMetrics evaluate_map(const Mesh& mesh, const MeshDistance& truth, const std::
         m.recall = static_cast<double>(recalled) / static_cast<double>(to_mesh.size());
         m.fscore = m.precision + m.recall > 0 ? 2 * m.precision * m.recall / (m.precision + m.recall) : 0.0;
         m.ghost_area = area_per_sample * static_cast<double>(ghosts);
+        m.path_ghost_area = area_per_sample * static_cast<double>(path_ghosts);
 
         // Boundary edges (one triangle) by the height of their midpoint, within the crop.
         std::vector<std::uint64_t> edges;

@@ -83,9 +83,15 @@ void RecordedDrive::move_by_time(RecordedScan& s, const Eigen::Isometry3d& fallb
     }
 }
 
-PointCloud RecordedDrive::world_scan(std::size_t k) {
+PointCloud RecordedDrive::world_scan(std::size_t k, std::vector<Eigen::Vector3f>* no_return) {
     RecordedScan s = scan(k);
     const Eigen::Isometry3d& pose = kept_[k].pose;
+    if (no_return) {
+        const Eigen::Matrix3f turn = pose.linear().cast<float>();
+        no_return->clear();
+        no_return->reserve(s.no_return.size());
+        for (const Eigen::Vector3f& u : s.no_return) no_return->push_back(turn * u);
+    }
     if (deskew_ && s.times.size() == s.cloud.points.size()) {
         move_by_time(s, pose, [](const Eigen::Isometry3d& at) { return at; });
     } else {

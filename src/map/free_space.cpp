@@ -11,6 +11,7 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/surface/plane_eigen.hpp"
+#include "angles.hpp"
 
 namespace lidarsurf {
 namespace {
@@ -25,23 +26,9 @@ constexpr float kAzimuthStep = 0.2f, kElevationStep = 0.4f;
 constexpr int kColumns = 1800;
 constexpr std::uint32_t kNoPixel = 0xffffffffu;
 
-// atan2 in degrees to within 0.001 degree (an 11th-order odd polynomial of atan on [0, 1]),
-// several times faster than std::atan2: the range image's bins are 0.2 degree wide.
-inline float atan2_deg(float y, float x) {
-    const float ax = std::fabs(x), ay = std::fabs(y);
-    const float mx = std::max(ax, ay), mn = std::min(ax, ay);
-    if (mx == 0) return 0;
-    const float a = mn / mx, a2 = a * a;
-    float r = a * (0.99997726f + a2 * (-0.33262347f + a2 * (0.19354346f + a2 * (-0.11643287f + a2 * (0.05265332f - 0.01172120f * a2)))));
-    if (ay > ax) r = 1.57079637f - r;
-    if (x < 0) r = 3.14159274f - r;
-    if (y < 0) r = -r;
-    return r * 57.2957795f;
-}
-inline float azimuth_deg(const Eigen::Vector3d& d) { return atan2_deg(static_cast<float>(d.y()), static_cast<float>(d.x())); }
-inline float elevation_deg(const Eigen::Vector3d& d) {
-    return atan2_deg(static_cast<float>(d.z()), static_cast<float>(std::sqrt(d.x() * d.x() + d.y() * d.y())));
-}
+using detail::atan2_deg;
+using detail::azimuth_deg;
+using detail::elevation_deg;
 
 }  // namespace
 
@@ -57,6 +44,8 @@ FreeSpaceCarver::FreeSpaceCarver(const CarvingConfig& config, double voxel_size)
       min_scans_(config.carve_min_scans),
       range_(config.carve_range),
       stale_scans_(config.carve_stale_scans),
+      stale_passes_(config.carve_stale_passes),
+      empty_range_(config.carve_empty_range),
       sigma2_(0) {
     if (!std::isfinite(voxel_size) || voxel_size <= 0) throw InvalidArgument("carving: voxel size must be finite and > 0");
 }
@@ -133,7 +122,7 @@ std::optional<Eigen::Vector3d> FreeSpaceCarver::image_normal(std::span<const Eig
             const int rr = row + k * dr, cc = (col + k * dc + kColumns) % kColumns;
             if (rr < 0 || rr >= rows_) return nullptr;
             const std::size_t i = static_cast<std::size_t>(rr) * kColumns + static_cast<std::size_t>(cc);
-            if (nearest_[i] == kNoPixel) continue;
+            if (nearest_[i] == kNoPixel || nearest_[i] >= real_) continue;  // no return, or an empty pixel's
             return std::fabs(std::sqrt(depth_[i]) - r) <= tolerance ? &points[nearest_[i]] : nullptr;
         }
         return nullptr;
@@ -169,8 +158,72 @@ bool FreeSpaceCarver::off_surface(const VoxelGrid& grid, std::span<const Eigen::
     return std::fabs(n.dot(mu - p)) >= margin_;
 }
 
+std::size_t FreeSpaceCarver::empty_pixels(const Eigen::Vector3d& s, std::span<const Eigen::Vector3f> no_return) {
+    const std::size_t pixels = static_cast<std::size_t>(rows_) * kColumns;
+    empty_.assign(pixels, 0);
+    // Per pixel, the first ray that fell in it; marked only where no return fell.
+    std::vector<std::uint32_t>& ray_of = empty_ray_;
+    ray_of.assign(pixels, kNoPixel);
+    for (std::size_t i = 0; i < no_return.size(); ++i) {
+        const Eigen::Vector3f& u = no_return[i];
+        if (!u.allFinite() || !(u.squaredNorm() > 0)) continue;
+        const Eigen::Vector3d d = u.cast<double>();
+        const int row = static_cast<int>((elevation_deg(d) - el_min_) / kElevationStep);
+        if (row < 0 || row >= rows_) continue;
+        const int col = static_cast<int>((azimuth_deg(d) + 180.f) / kAzimuthStep) % kColumns;
+        const std::size_t px = static_cast<std::size_t>(row) * kColumns + static_cast<std::size_t>(col);
+        if (nearest_[px] != kNoPixel) continue;  // a return fell there too: not empty
+        empty_[px] = 1;
+        if (ray_of[px] == kNoPixel) ray_of[px] = static_cast<std::uint32_t>(i);
+    }
+    // A pixel empty with the rays beside it in its row, the nearest on either side within
+    // kRayGap columns (a sensor sparser than the image leaves columns between its rays): a run of
+    // rays that returned nothing, not one ray lost at random. Its return: empty_range_ along the ray.
+    constexpr int kRayGap = 4;
+    const auto neighbour_empty = [&](std::size_t row, std::size_t col, int step) {
+        for (int k = 1; k <= kRayGap; ++k) {
+            const std::size_t q = row * kColumns + (col + kColumns + static_cast<std::size_t>(k * step + kColumns)) % kColumns;
+            if (empty_[q]) return true;
+            if (nearest_[q] != kNoPixel) return false;  // a return beside it
+        }
+        return false;
+    };
+    // How far the ray saw: up to the nearest return around it (kRows rows, kRayGap columns either
+    // way), empty_range_ at most. A surface too dark to return, in front of what the rays beside it
+    // hit, ends the free space there: the wall behind a dark car is not seen through.
+    constexpr int kRows = 2;
+    const float cap2 = static_cast<float>(empty_range_ * empty_range_);
+    const auto seen_to = [&](std::size_t row, std::size_t col) {
+        float d2 = cap2;
+        for (int dr = -kRows; dr <= kRows; ++dr) {
+            const int r = static_cast<int>(row) + dr;
+            if (r < 0 || r >= rows_) continue;
+            for (int dc = -kRayGap; dc <= kRayGap; ++dc) {
+                const std::size_t q = static_cast<std::size_t>(r) * kColumns + (col + static_cast<std::size_t>(dc + kColumns)) % kColumns;
+                if (nearest_[q] < real_) d2 = std::min(d2, depth_[q]);
+            }
+        }
+        return d2;
+    };
+    empty_points_.clear();
+    std::vector<std::pair<std::size_t, float>>& accepted = empty_seen_;
+    accepted.clear();
+    for (std::size_t px = 0; px < pixels; ++px) {
+        if (!empty_[px]) continue;
+        const std::size_t row = px / kColumns, col = px % kColumns;
+        if (!neighbour_empty(row, col, -1) || !neighbour_empty(row, col, 1)) continue;
+        accepted.emplace_back(px, seen_to(row, col));
+    }
+    for (const auto& [px, d2] : accepted) {  // after every pixel is measured: the returns given here are not the rays'
+        nearest_[px] = static_cast<std::uint32_t>(real_ + empty_points_.size());
+        depth_[px] = d2;
+        empty_points_.push_back(s + std::sqrt(static_cast<double>(d2)) * no_return[ray_of[px]].cast<double>().normalized());
+    }
+    return empty_points_.size();
+}
+
 CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vector3d> points, std::span<const VoxelGrid::Hit> hits,
-                                    const Eigen::Vector3d& viewpoint) {
+                                    const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3f> no_return) {
     CarvingStats out;
     const double alpha = grid.voxel_size();
     sigma2_ = (alpha / 8) * (alpha / 8);
@@ -184,6 +237,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
         Evidence& e = evidence_[h.voxel];
         if (e.last_hit == stamp) continue;
         if (e.hits < UINT16_MAX) ++e.hits;
+        e.since_hit = 0;
         e.last_hit = stamp;
         refit.push_back(h.voxel);
     }
@@ -215,7 +269,15 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     float el_min = 90, el_max = -90;
     for (float el : elevation_)
         if (el == el) el_min = std::min(el_min, el), el_max = std::max(el_max, el);
+    if (empty_range_ > 0)  // the rows of the rays that returned nothing too (the sky)
+        for (const Eigen::Vector3f& u : no_return)
+            if (u.allFinite() && u.squaredNorm() > 0) {
+                const float el = elevation_deg(u.cast<double>());
+                el_min = std::min(el_min, el), el_max = std::max(el_max, el);
+            }
     if (!(el_max >= el_min)) return out;
+    el_min_ = el_min;
+    real_ = n;
     const int rows = static_cast<int>((el_max - el_min) / kElevationStep) + 1;
     rows_ = rows;
     const std::size_t pixels = static_cast<std::size_t>(rows) * kColumns;
@@ -237,6 +299,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
         const float d = range2_[i];
         if (d < depth_[px]) depth_[px] = d, nearest_[px] = static_cast<std::uint32_t>(i);
     }
+    if (empty_range_ > 0 && !no_return.empty()) out.empty = empty_pixels(s, no_return);
     const std::vector<std::uint32_t>& nearest = nearest_;
     const std::vector<float>& depth = depth_;
     using Map = BlockMap<std::int32_t>;
@@ -265,13 +328,16 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
             if (depth[static_cast<std::size_t>(q)] < need) continue;
             ++tested;
             const VoxelStats& st = stats[v];
-            const Eigen::Vector3d p = grid.to_local(points[nearest[static_cast<std::size_t>(q)]]);
+            const std::uint32_t target = nearest[static_cast<std::size_t>(q)];
+            const bool empty = target >= real_;  // a ray that returned nothing: no surface where it ends
             // A planar voxel by its plane; a thick or sparse one, a young one (a car seen from
             // afar) and a stale one (no hit for stale_scans_ scans) by the returns near it.
-            const bool stale = stale_scans_ > 0 && stamp - e.last_hit >= static_cast<std::uint32_t>(stale_scans_);
+            const bool young = e.hits <= kYoungHits, stale = stale_scans_ > 0 && stamp - e.last_hit >= static_cast<std::uint32_t>(stale_scans_);
+            if (empty && !young && !stale) continue;  // emptiness alone: only a young or stale voxel
+            const Eigen::Vector3d p = empty ? empty_points_[target - real_] : grid.to_local(points[target]);
             if ((e.shape == Shape::Planar && crosses_plane(st, e, s, p)) ||
-                ((e.shape != Shape::Planar || e.hits <= kYoungHits || stale) && passes_near(st, e, s, p) &&
-                 off_surface(grid, points, st.mean, p, static_cast<std::uint32_t>(q)))) {
+                ((e.shape != Shape::Planar || young || stale) && passes_near(st, e, s, p) &&
+                 (empty || off_surface(grid, points, st.mean, p, static_cast<std::uint32_t>(q))))) {
                 e.last_pass = stamp;
                 mine.push_back(v);
                 return;
@@ -336,7 +402,10 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     for (std::uint32_t v : pass) {
         Evidence& e = evidence_[v];
         if (e.passes < UINT16_MAX) ++e.passes;
-        if (e.passes >= min_scans_ && e.passes > e.hits) carved.push_back(v);
+        if (e.since_hit < UINT16_MAX) ++e.since_hit;
+        const bool stale = stale_scans_ > 0 && stamp - e.last_hit >= static_cast<std::uint32_t>(stale_scans_);
+        if ((e.passes >= min_scans_ && (e.passes > e.hits || e.hits <= 1)) || (stale_passes_ > 0 && stale && e.since_hit >= stale_passes_))
+            carved.push_back(v);
     }
     for (auto it = carved.rbegin(); it != carved.rend(); ++it) {
         const std::size_t moved = grid.remove(*it);

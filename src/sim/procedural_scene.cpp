@@ -35,14 +35,18 @@ constexpr double kSidewalkOuter = 9.0; // building line starts here
 constexpr double kLotBack = 40.0;      // the blocks end at |y| = 40
 constexpr double kCrossHalf = 5.0;     // cross streets are 10 m wide
 
-/// A car or a van in its own frame (x forward, on the ground at z = 0).
-Mesh car_body(Rng& rng) {
-    MeshBuilder b;
+/// A car or a van in its own frame (x forward, on the ground at z = 0): the hull, and the rest
+/// (cabin or box body, wheels).
+struct CarParts {
+    Mesh hull, rest;
+};
+CarParts car_parts(Rng& rng) {
+    MeshBuilder hull, b;
     const bool van = rng.chance(0.2);
     const double len = van ? rng.uniform(4.8, 5.4) : rng.uniform(3.9, 4.7);
     const double wid = rng.uniform(1.7, 1.9), wheel_r = van ? 0.36 : 0.32;
     const double hull_top = van ? 1.1 : rng.uniform(0.95, 1.05);
-    b.box_between({-len / 2, -wid / 2, 0.3}, {len / 2, wid / 2, hull_top});       // hull
+    hull.box_between({-len / 2, -wid / 2, 0.3}, {len / 2, wid / 2, hull_top});    // hull
     if (van) {
         b.box_between({-len / 2, -wid / 2 + 0.05, hull_top}, {len / 2 - 0.9, wid / 2 - 0.05, 2.1});  // box body
     } else {
@@ -53,6 +57,13 @@ Mesh car_body(Rng& rng) {
     for (double x : {-ax, ax})
         for (double s : {-1.0, 1.0})
             b.cylinder({x, s * (wid / 2 - 0.22), wheel_r}, {x, s * (wid / 2 + 0.0), wheel_r}, wheel_r, 14);
+    return {hull.take(), b.take()};
+}
+Mesh car_body(Rng& rng) {
+    CarParts parts = car_parts(rng);
+    MeshBuilder b;
+    b.append(parts.hull);
+    b.append(parts.rest);
     return b.take();
 }
 
@@ -265,6 +276,26 @@ void make_town(World& w, Rng& rng) {
         m.x_max = half - 3;
         w.movers.push_back(std::move(m));
     }
+    // Dark cars, parked all along in free spots (drawn last, for the same reason): the hull below
+    // the windows returns nothing, the cabin and the wheels do.
+    if (static_cast<std::size_t>(w.config.dark_cars) > free_spots.size())
+        throw InvalidArgument("the town has " + std::to_string(free_spots.size()) + " free curb spots left for " +
+                              std::to_string(w.config.dark_cars) + " dark cars: lengthen the street or ask for fewer");
+    MeshBuilder dark, lit;
+    lit.append(w.static_mesh);
+    for (int i = 0; i < w.config.dark_cars; ++i) {
+        const std::size_t k = std::min(free_spots.size() - 1, static_cast<std::size_t>(rng.uniform(0.0, static_cast<double>(free_spots.size()))));
+        const V spot = free_spots[k];
+        free_spots.erase(free_spots.begin() + static_cast<std::ptrdiff_t>(k));
+        const double yaw = spot.y() > 0 ? std::numbers::pi : 0.0;
+        const CarParts parts = car_parts(rng);
+        place(dark, parts.hull, spot, yaw);
+        place(lit, parts.rest, spot, yaw);
+    }
+    if (w.config.dark_cars > 0) {
+        w.static_mesh = lit.take();
+        w.dark_mesh = dark.take();
+    }
 }
 
 // ---- Off-road ---------------------------------------------------------------------------
@@ -342,8 +373,8 @@ void SceneConfig::validate() const {
     if (moving_cars < 0 || moving_cars > 100) throw InvalidArgument("moving cars must be in [0, 100]");
     if (pedestrians < 0 || pedestrians > 500) throw InvalidArgument("pedestrians must be in [0, 500]");
     if (cyclists < 0 || cyclists > 100) throw InvalidArgument("cyclists must be in [0, 100]");
-    if (leaving_cars < 0 || leaving_cars > 100 || parking_cars < 0 || parking_cars > 100)
-        throw InvalidArgument("leaving and parking cars must be in [0, 100]");
+    if (leaving_cars < 0 || leaving_cars > 100 || parking_cars < 0 || parking_cars > 100 || dark_cars < 0 || dark_cars > 100)
+        throw InvalidArgument("leaving, parking and dark cars must be in [0, 100]");
     if (!(ego_speed > 0 && ego_speed <= 100)) throw InvalidArgument("ego speed must be in (0, 100] m/s");
     if (!(weave >= 0 && weave <= 3)) throw InvalidArgument("weave must be in [0, 3] m");
 }
@@ -425,6 +456,7 @@ Mesh World::movers_at(double t) const {
 Mesh World::standing_at(double t) const {
     MeshBuilder b;
     b.append(static_mesh);
+    b.append(dark_mesh);
     for (const auto& m : movers)
         if (m.parked_at(t)) place_mover(b, m, t);  // parked: at its spot, on the street
     return b.take();
@@ -433,6 +465,7 @@ Mesh World::standing_at(double t) const {
 Mesh World::scene_at(double t) const {
     MeshBuilder b;
     b.append(static_mesh);
+    b.append(dark_mesh);
     b.append(movers_at(t));
     return b.take();
 }

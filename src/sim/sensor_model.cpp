@@ -1,7 +1,9 @@
 #include "lidarsurf/sim/sensor_model.hpp"
 
 #include <cmath>
+#include <fstream>
 #include <numbers>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
@@ -225,6 +227,16 @@ PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const
     PointCloud cloud = simulate_scan(scene, sensor, pose, seed);
     for (auto& p : cloud.points) p += origin;
     return cloud;
+}
+
+std::optional<BeamPattern> drive_pattern(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return std::nullopt;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path.string() + ": cannot read");
+    std::ostringstream text;
+    text << in.rdbuf();
+    return SensorModel::from_json(text.str()).pattern();
 }
 
 }  // namespace lidarsurf::sim

@@ -25,6 +25,22 @@ private:
     const RayScene* b_;
 };
 
+/// A scene seen through surfaces that absorb: a ray whose first hit is on `dark` returns nothing.
+class AbsorbingScene final : public RayScene {
+public:
+    AbsorbingScene(const RayScene& lit, const RayScene* dark) : lit_(lit), dark_(dark) {}
+    std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const override {
+        auto hit = lit_.intersect(o, d, max_range);
+        if (!dark_) return hit;
+        if (auto absorbed = dark_->intersect(o, d, hit ? *hit : max_range); absorbed && (!hit || *absorbed < *hit)) return std::nullopt;
+        return hit;
+    }
+
+private:
+    const RayScene& lit_;
+    const RayScene* dark_;
+};
+
 std::uint64_t frame_seed(std::uint64_t seed, std::size_t index) {
     std::uint64_t x = seed * 0x9E3779B97F4A7C15ull + index + 1;
     x = (x ^ (x >> 31)) * 0xBF58476D1CE4E5B9ull;
@@ -41,7 +57,9 @@ void SimulatorConfig::validate() const {
 }
 
 Simulator::Simulator(World world, SimulatorConfig config)
-    : world_(std::move(world)), config_(std::move(config)), static_scene_((config_.validate(), world_.static_mesh)) {}
+    : world_(std::move(world)), config_(std::move(config)), static_scene_((config_.validate(), world_.static_mesh)) {
+    if (!world_.dark_mesh.triangles.empty()) dark_scene_.emplace(world_.dark_mesh);
+}
 
 double Simulator::fraction(std::size_t index) const {
     return config_.frames == 1 ? 0.5 : static_cast<double>(index) / static_cast<double>(config_.frames - 1);
@@ -64,7 +82,8 @@ SimulatedFrame Simulator::frame(std::size_t index) const {
     f.movers = world_.movers_at(f.time);
     std::optional<MeshScene> movers;
     if (!f.movers.empty()) movers.emplace(f.movers);
-    const UnionScene scene(static_scene_, movers ? &*movers : nullptr);
+    const UnionScene lit(static_scene_, movers ? &*movers : nullptr);
+    const AbsorbingScene scene(lit, dark_scene_ ? &*dark_scene_ : nullptr);
     if (config_.sweep_seconds > 0) {
         const std::size_t steps = azimuth_steps(config_.sensor);
         std::vector<Eigen::Isometry3d> poses(steps);
@@ -77,7 +96,10 @@ SimulatedFrame Simulator::frame(std::size_t index) const {
     } else {
         f.scan = simulate_scan(scene, config_.sensor, f.pose, frame_seed(config_.seed, index));
     }
-    if (config_.gt_beams > 0) f.ground_truth = simulate_scan(scene, ground_truth_sensor(), f.pose, 0);
+    if (config_.gt_beams > 0) {  // the ground truth sees the dark surfaces too: they are there
+        const UnionScene all(lit, dark_scene_ ? &*dark_scene_ : nullptr);
+        f.ground_truth = simulate_scan(all, ground_truth_sensor(), f.pose, 0);
+    }
     return f;
 }
 

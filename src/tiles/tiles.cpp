@@ -35,10 +35,11 @@ void TileConfig::validate() const {
     if (halo_cubes < 8 || halo_cubes > 1024) throw InvalidArgument("halo_cubes must be in [8, 1024], got " + std::to_string(halo_cubes));
 }
 
-ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint) {
+ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, bool empty_rays) {
     if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
     ScanReach r;
     r.viewpoint = viewpoint;
+    r.empty_rays = empty_rays;
     double r2 = 0;
     for (const Eigen::Vector3d& p : points) {
         if (!p.allFinite()) continue;
@@ -106,9 +107,11 @@ Eigen::AlignedBox3d TilePlan::crop(const TileKey& t) const {
 bool TilePlan::reaches(const TileKey& t, std::size_t scan) const {
     const ScanReach& s = scans_.at(scan);
     if (s.box.isEmpty()) return false;
-    // No return beyond the radius: no voxel farther than it (and a voxel) is passed or hit, and
-    // the young voxels it would keep are within it. A metre for rounding (the carver's floats).
-    return distance_xy(s.viewpoint, crop(t)) <= s.radius + 2 * config_.voxel_size + 1.0;
+    // No return beyond the radius (nor a ray that returned nothing, beyond carve_empty_range): no
+    // voxel farther than it (and a voxel) is passed or hit, and the young voxels it would keep are
+    // within it. A metre for rounding (the carver's floats).
+    const double radius = s.empty_rays && config_.carve ? std::max(s.radius, config_.carve_empty_range) : s.radius;
+    return distance_xy(s.viewpoint, crop(t)) <= radius + 2 * config_.voxel_size + 1.0;
 }
 
 std::size_t TilePlan::scans_of(const TileKey& t) const {
@@ -119,15 +122,23 @@ std::size_t TilePlan::scans_of(const TileKey& t) const {
 
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
                ReconstructionSummary* summary) {
+    return fuse_tile(plan, tile, [&](std::size_t i, std::vector<Eigen::Vector3f>&) { return scan(i); }, summary);
+}
+
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile,
+               const std::function<std::vector<Eigen::Vector3d>(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
+               ReconstructionSummary* summary) {
     Reconstructor rec(plan.config(), plan.sensor(), plan.grid_origin());
     const Eigen::AlignedBox3d crop = plan.crop(tile);
+    std::vector<Eigen::Vector3f> no_return;
     for (std::size_t i = 0; i < plan.scan_count(); ++i) {
         if (!plan.reaches(tile, i)) {
             rec.skip_scan();
             continue;
         }
-        const std::vector<Eigen::Vector3d> points = scan(i);
-        rec.integrate(points, plan.viewpoint(i), crop);
+        no_return.clear();
+        const std::vector<Eigen::Vector3d> points = scan(i, no_return);
+        rec.integrate(points, plan.viewpoint(i), crop, no_return);
     }
     Mesh mesh = mesh_tile(rec, plan, tile);
     if (summary) *summary = rec.summary();

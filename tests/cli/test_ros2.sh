@@ -39,14 +39,14 @@ fi
 
 if [ "$part" != readers ]; then
 # --- The golden test.
-"$cli" fuse "$dir/drive" -o "$dir/kitti.ply" -q >/dev/null
+"$cli" fuse "$dir/drive" -o "$dir/kitti.ply" -q --carve-empty-range 0 >/dev/null  # the bag's clouds do not say which rays returned nothing
 for rec in db3bag db3bag/db3bag_0.db3 zstd.mcap lz4.mcap chunked.mcap plain.mcap; do
     expect 0 "3 frames fused .*3 of 3 scans within its span" -- "$cli" fuse "$dir/$rec" "${poses[@]}" -o "$dir/ros2.ply" -q
     check "$rec: the map is the KITTI layout's, bit for bit" -- cmp -s "$dir/kitti.ply" "$dir/ros2.ply"
     rm -f "$dir/ros2.ply"
 done
 for opts in "--tile-size 30" "--live"; do
-    "$cli" fuse "$dir/drive" -o "$dir/kitti.ply" -q $opts >/dev/null
+    "$cli" fuse "$dir/drive" -o "$dir/kitti.ply" -q $opts --carve-empty-range 0 >/dev/null
     "$cli" fuse "$dir/zstd.mcap" "${poses[@]}" -o "$dir/ros2.ply" -q $opts >/dev/null
     check "fuse $opts: the MCAP's map is the KITTI layout's, bit for bit" -- cmp -s "$dir/kitti.ply" "$dir/ros2.ply"
 done

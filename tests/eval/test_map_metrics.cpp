@@ -25,13 +25,26 @@ std::vector<Eigen::Vector3d> gt_points() {
     return gt;
 }
 
+// The truth: the 40 x 20 m quad, its distance field, the crop of a drive along it.
+Mesh flat_truth() {
+    Mesh truth;
+    quad(truth, -20, 20, -10, 10, 0.0);
+    return truth;
+}
+
+struct FlatStreet {
+    Mesh truth = flat_truth();
+    MeshDistance distance{truth};
+    DriveCrop crop{{{-20, 0, 1.7}, {20, 0, 1.7}}, 30.0};
+};
+
 }  // namespace
 
 TEST(MapMetrics, TruthScoresPerfectAGhostQuadCountsItsAreaAHoleCostsRecall) {
-    Mesh truth;
-    quad(truth, -20, 20, -10, 10, 0.0);
-    const MeshDistance distance(truth);
-    const DriveCrop crop({{-20, 0, 1.7}, {20, 0, 1.7}}, 30.0);
+    const FlatStreet street;
+    const Mesh& truth = street.truth;
+    const MeshDistance& distance = street.distance;
+    const DriveCrop& crop = street.crop;
     MapGroundTruth builder(distance, crop, 0.1);
     std::vector<Eigen::Vector3d> scan = gt_points();
     scan.emplace_back(0, 0, 1.0);  // a point on a moving object: not on the static scene, dropped
@@ -67,4 +80,36 @@ TEST(MapMetrics, TruthScoresPerfectAGhostQuadCountsItsAreaAHoleCostsRecall) {
     // The crop: a drive 100 m away sees nothing of the map.
     const DriveCrop far({{0, 200, 0}}, 30.0);
     EXPECT_THROW(evaluate_map(truth, distance, gt, far, config), InvalidInput);
+}
+
+// The ghost on the movers' paths: a car's boxes at two frames hold one of two ghost quads; only
+// that one counts, whole.
+TEST(MapMetrics, TheGhostOnTheMoversPathsIsTheGhostInsideTheirBoxes) {
+    const FlatStreet street;
+    const Mesh& truth = street.truth;
+    const MeshDistance& distance = street.distance;
+    const DriveCrop& crop = street.crop;
+    MapEvaluationConfig config;
+    config.sample_spacing = 0.1;
+    Mesh ghost = truth;
+    quad(ghost, 0, 4, 1, 3, 1.0);     // on the path: inside the car's boxes
+    quad(ghost, -10, -8, 5, 7, 1.0);  // elsewhere: 4 m^2 of ghost off the path
+    SweptVolume swept(0.2);
+    for (double x : {0.0, 2.0}) {  // the car at two frames: its floor and roof, 2 x 2 m, joined into one part
+        Mesh frame;
+        quad(frame, x, x + 2, 1, 3, 0.3);
+        quad(frame, x, x + 2, 1, 3, 1.5);
+        frame.triangles.push_back({0, 4, 5});
+        swept.add(frame);
+    }
+    EXPECT_EQ(swept.boxes(), 2u);
+    EXPECT_TRUE(swept.contains({1.0, 2.0, 1.0}));
+    EXPECT_TRUE(swept.contains({4.1, 2.0, 1.6}));   // within the pad
+    EXPECT_FALSE(swept.contains({4.1, 2.0, 1.8}));  // above it
+    EXPECT_FALSE(swept.contains({-9.0, 6.0, 1.0}));
+    const MapMetrics with = evaluate_map(ghost, distance, gt_points(), crop, config, &swept);
+    EXPECT_NEAR(with.ghost_area, 12.0, 0.6);
+    EXPECT_NEAR(with.path_ghost_area, 8.0, 0.5);
+    EXPECT_EQ(evaluate_map(ghost, distance, gt_points(), crop, config).path_ghost_area, 0.0);
+    EXPECT_THROW(SweptVolume(-1.0), InvalidArgument);
 }

@@ -4,6 +4,7 @@
 // where each surface is (and where a box was and no longer is) is known exactly.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -35,11 +36,27 @@ inline std::optional<double> hit_box(const Eigen::Vector3d& s, const Eigen::Vect
     return t0 <= t1 && t0 > 0 ? std::optional<double>(t0) : std::nullopt;
 }
 
+// What a scan says beside its returns: the rays that returned nothing (unit directions), when asked.
+// `dark` boxes absorb the rays that hit them first (no return); `dropout` loses that share of the
+// returns at random (a fixed pattern of rays per scan, seeded by the scan's number).
+struct ScanExtras {
+    std::vector<Box> dark;
+    double dropout = 0;
+    std::vector<Eigen::Vector3f>* no_return = nullptr;
+};
+
 // One scan with `boxes` standing in the street: 0.4 degree azimuth, 0.5 degree elevation from -24
 // to +2 degrees, returns within 40 m.
-inline std::vector<Eigen::Vector3d> scan_with(int i, const std::vector<Box>& boxes) {
+inline std::vector<Eigen::Vector3d> scan_with(int i, const std::vector<Box>& boxes, const ScanExtras& extras = {}) {
     const Eigen::Vector3d s = sensor_at(i);
     std::vector<Eigen::Vector3d> points;
+    std::uint64_t state = 0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(i + 1);
+    const auto uniform = [&] {  // splitmix64
+        std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    };
     for (double el = -24.0; el <= 2.0; el += 0.5)
         for (double az = 0; az < 360.0; az += 0.4) {
             const double e = el * M_PI / 180, a = az * M_PI / 180;
@@ -56,7 +73,12 @@ inline std::vector<Eigen::Vector3d> scan_with(int i, const std::vector<Box>& box
             }
             for (const Box& b : boxes)
                 if (const auto tb = hit_box(s, u, b)) t = std::min(t, *tb);
-            if (t <= 40.0) points.push_back(s + t * u);
+            bool absorbed = false;
+            for (const Box& b : extras.dark)
+                if (const auto tb = hit_box(s, u, b); tb && *tb < t) absorbed = true, t = *tb;
+            const bool lost = extras.dropout > 0 && uniform() < extras.dropout;
+            if (t <= 40.0 && !absorbed && !lost) points.push_back(s + t * u);
+            else if (extras.no_return) extras.no_return->push_back(u.cast<float>());
         }
     return points;
 }

@@ -54,12 +54,32 @@ std::size_t triangles_in(const Mesh& m, const Box& b, double grow = 0, double z_
 }
 
 // The map of a 40-scan drive with `boxes_at(i)` standing in the street at scan i, carved or not.
+// Both are 40 scans long: a voxel gone stale is removed after three passes (carve_stale_passes)
+// instead of six, what a 150-scan drive gives it time for.
+constexpr int kStalePasses = 3;
 template <typename F>
 Mesh fused(bool carve, F&& boxes_at) {
     ReconstructionConfig c;
     c.carve = carve;
+    c.carve_stale_passes = kStalePasses;
     Reconstructor rec(c, sensor_at(0));
     for (int i = 0; i < 40; ++i) rec.integrate(scan_with(i, boxes_at(i)), sensor_at(i));
+    return rec.extract_mesh();
+}
+
+// The same drive with the scans saying which of their rays returned nothing (`empty_rays`), the
+// `dark` boxes absorbing what hits them and `dropout` of the returns lost at random.
+template <typename F>
+Mesh fused_with_rays(bool carve, F&& boxes_at, const std::vector<Box>& dark = {}, double dropout = 0, bool empty_rays = true) {
+    ReconstructionConfig c;
+    c.carve = carve;
+    c.carve_stale_passes = kStalePasses;
+    Reconstructor rec(c, sensor_at(0));
+    for (int i = 0; i < 40; ++i) {
+        std::vector<Eigen::Vector3f> no_return;
+        const std::vector<Eigen::Vector3d> points = scan_with(i, boxes_at(i), {dark, dropout, empty_rays ? &no_return : nullptr});
+        rec.integrate(points, sensor_at(i), no_return);
+    }
     return rec.extract_mesh();
 }
 
@@ -164,9 +184,10 @@ TEST(FreeSpace, RejectsBadParameters) {
 }
 
 // A car parked for the first half of the drive, then gone; another parked all along; the pole. The
-// oracle is the same drive fused without carving, and the boxes themselves. What is left of the car
-// that went is its roof, at the sensor's height: the rays that would pass through it return from
-// beyond the 40 m range, or not at all, so no scan gives evidence there.
+// oracle is the same drive fused without carving, and the boxes themselves. The car that went was
+// hit by twenty scans: the passes since its last hit remove it (carve_stale_passes), its past hits
+// do not outweigh them; its roof, at the sensor's height, is seen through by the few rays that
+// return within the 40 m range.
 TEST(FreeSpace, ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays) {
     const Box gone{{8.0, 2.1, 0.0}, {12.5, 3.9, 1.5}}, stays{{20.0, -3.9, 0.0}, {24.5, -2.1, 1.5}};
     const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{stays, gone} : std::vector<Box>{stays}; };
@@ -174,7 +195,7 @@ TEST(FreeSpace, ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays) {
     const Box where_it_stood{{8.0, 2.1, 0.3}, {12.5, 3.9, 1.6}};
     const std::size_t left = triangles_in(carved, where_it_stood), before = triangles_in(kept, where_it_stood);
     ASSERT_GT(before, 200u);
-    EXPECT_LT(left, before / 2) << "most of the car that left is carved";
+    EXPECT_LE(left, before / 20) << left << " of " << before << ": 5 % at most of the car that left stays";
     // The car parked all along and the pole keep their surfaces.
     const std::size_t on_car = triangles_in(carved, stays, 0.1, 0.2), on_car_kept = triangles_in(kept, stays, 0.1, 0.2);
     ASSERT_GT(on_car_kept, 300u);
@@ -184,15 +205,17 @@ TEST(FreeSpace, ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays) {
     EXPECT_GE(triangles_in(carved, pole), triangles_in(kept, pole) * 9 / 10);
 }
 
-// A walker crossing 1 m in front of the wall: most of what it leaves where it walked is carved.
+// A walker crossing 1 m in front of the wall: less than 5 % of what it leaves where it walked stays.
 TEST(FreeSpace, AWalkersPathInFrontOfTheWallIsMostlyCarved) {
     const auto walker = [](int i) { return Box{{2.0 + 0.15 * i, 7.5, 0.0}, {2.5 + 0.15 * i, 8.0, 1.8}}; };
     const auto boxes = [&](int i) { return std::vector<Box>{walker(i)}; };
     const Mesh carved = fused(true, boxes), kept = fused(false, boxes);
-    const Box path{{2.0, 7.5, 0.3}, {walker(39).lo.x() - 0.6, 8.0, 1.8}};  // away from where it ends
+    // Where it walked ten scans or more before the drive ends (what it left in the last scans, seen
+    // through by too few scans yet, is the end of the drive's: docs/method.md, "Free space").
+    const Box path{{2.0, 7.5, 0.3}, {walker(29).lo.x(), 8.0, 1.8}};
     const std::size_t left = triangles_in(carved, path), before = triangles_in(kept, path);
     ASSERT_GT(before, 300u);
-    EXPECT_LT(left, before / 3);
+    EXPECT_LT(left, before / 20) << left << " of " << before << " triangles left where it walked";
     // The wall behind it stays.
     const Box wall{{-5.0, kWallY - 0.2, 0.3}, {20.0, kWallY + 0.2, 3.0}};
     EXPECT_GE(triangles_in(carved, wall), triangles_in(kept, wall) * 98 / 100);
@@ -251,4 +274,58 @@ TEST(FreeSpace, SkippingScansThatReachNothingIsCarvingThem) {
     EXPECT_EQ(differences(skipped), 0u);
     // Not counting them gives other evidence: the count is not a formality.
     EXPECT_GT(differences(unaware), 0u);
+}
+
+// A van taller than the sensor parked for the first half of the drive on the side with no wall,
+// then gone, the scans saying which rays returned nothing: the rays through the upper half of its
+// side go up, to the sky, and return nothing, so only they see through it there.
+TEST(FreeSpace, RaysThatReturnNothingCarveTheUpperSideOfAVanThatLeft) {
+    const Box gone{{8.0, -3.9, 0.0}, {13.0, -2.1, 2.4}}, stays{{20.0, 2.1, 0.0}, {24.5, 3.9, 1.5}};
+    const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{stays, gone} : std::vector<Box>{stays}; };
+    const Mesh carved = fused_with_rays(true, boxes), returns_only = fused_with_rays(true, boxes, {}, 0, false),
+               kept = fused_with_rays(false, boxes);
+    const Box upper{{8.0, -3.9, 1.8}, {13.0, -2.1, 2.5}};
+    const std::size_t before = triangles_in(kept, gone, 0.1, 0.3);
+    ASSERT_GT(before, 300u);
+    ASSERT_GT(triangles_in(returns_only, upper, 0.1), 50u) << "the returns alone leave the upper side";
+    EXPECT_LE(triangles_in(carved, gone, 0.1, 0.3), before / 20) << "5 % at most of the van that left stays";
+    EXPECT_LE(triangles_in(carved, upper, 0.1), triangles_in(returns_only, upper, 0.1) / 3);
+    const std::size_t on_car = triangles_in(carved, stays, 0.1, 0.2), on_car_kept = triangles_in(kept, stays, 0.1, 0.2);
+    ASSERT_GT(on_car_kept, 300u);
+    EXPECT_GE(on_car, on_car_kept * 98 / 100);
+    const Box pole{{kPoleX - 0.25, kPoleY - 0.25, 0.3}, {kPoleX + 0.25, kPoleY + 0.25, 5.5}};
+    EXPECT_GE(triangles_in(carved, pole), triangles_in(kept, pole) * 98 / 100);
+    const Box wall{{-5.0, kWallY - 0.2, 0.3}, {30.0, kWallY + 0.2, 5.0}};
+    EXPECT_GE(triangles_in(carved, wall), triangles_in(kept, wall) * 98 / 100);
+}
+
+// A car parked all along whose hull returns nothing (too dark), its cabin returning, between the
+// drive and the wall; 2 % of the returns lost at random: what the hull swallows and the lost rays
+// carve nothing that stands (the cabin, the wall behind the car, the ground, the pole).
+TEST(FreeSpace, ADarkCarTheWallBehindItAndRandomDropoutsStay) {
+    const Box hull{{14.0, 2.1, 0.3}, {18.5, 3.9, 1.0}}, cabin{{15.0, 2.2, 1.0}, {17.5, 3.8, 1.45}};
+    const auto boxes = [&](int) { return std::vector<Box>{cabin}; };
+    const Mesh carved = fused_with_rays(true, boxes, {hull}, 0.02), kept = fused_with_rays(false, boxes, {hull}, 0.02);
+    const std::size_t on_cabin = triangles_in(kept, cabin, 0.1, 1.05);
+    ASSERT_GT(on_cabin, 100u);
+    EXPECT_GE(triangles_in(carved, cabin, 0.1, 1.05), on_cabin * 98 / 100);
+    const Box wall_behind{{8.0, kWallY - 0.2, 0.3}, {26.0, kWallY + 0.2, 4.0}};
+    ASSERT_GT(triangles_in(kept, wall_behind), 300u);
+    EXPECT_GE(triangles_in(carved, wall_behind), triangles_in(kept, wall_behind) * 98 / 100);
+    const Box ground{{-5.0, -8.0, -0.2}, {30.0, 8.0, 0.2}};
+    EXPECT_GE(triangles_in(carved, ground), triangles_in(kept, ground) * 98 / 100);
+    const Box pole{{kPoleX - 0.25, kPoleY - 0.25, 0.3}, {kPoleX + 0.25, kPoleY + 0.25, 5.5}};
+    EXPECT_GE(triangles_in(carved, pole), triangles_in(kept, pole) * 98 / 100);
+}
+
+// Two cars parked nose to tail (0.6 m apart); the first leaves halfway: the other stays whole.
+TEST(FreeSpace, OfTwoCarsParkedSideBySideTheOneThatStaysIsWhole) {
+    const Box leaves{{8.0, 2.1, 0.0}, {12.5, 3.9, 1.5}}, stays{{13.1, 2.1, 0.0}, {17.6, 3.9, 1.5}};
+    const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{leaves, stays} : std::vector<Box>{stays}; };
+    const Mesh carved = fused_with_rays(true, boxes), kept = fused_with_rays(false, boxes);
+    const Box where_it_stood{{8.0, 2.1, 0.3}, {12.3, 3.9, 1.6}};
+    EXPECT_LE(triangles_in(carved, where_it_stood), triangles_in(kept, where_it_stood) / 20);
+    const std::size_t on_car = triangles_in(kept, stays, 0.1, 0.2);
+    ASSERT_GT(on_car, 300u);
+    EXPECT_GE(triangles_in(carved, stays, 0.1, 0.2), on_car * 98 / 100);
 }

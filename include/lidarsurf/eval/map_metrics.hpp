@@ -9,7 +9,8 @@
 //    completeness: GT points -> mesh surface (exact, clipped to truncation_completeness);
 //    Chamfer-L1 their mean; precision / recall / F-score at `threshold`;
 //  - ghost area: mesh area farther than ghost_distance from the static scene (moving objects'
-//    trails, spurious surfaces), in m^2 and as a share of the mesh area;
+//    trails, spurious surfaces), in m^2 and as a share of the mesh area; the part of it on the
+//    movers' paths: within the volume the moving objects took at the scans' times (SweptVolume);
 //  - boundary edges by height above the ground: the share of mesh edges with one triangle
 //    (holes, perforated surfaces) in each height band.
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "lidarsurf/core/kd_tree.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
@@ -55,6 +57,7 @@ struct MapMetrics {
     double precision = 0, recall = 0, fscore = 0;
     double mesh_area = 0;   ///< m^2, within the crop
     double ghost_area = 0;  ///< m^2
+    double path_ghost_area = 0;  ///< m^2 of the ghost area within the movers' swept volume (0 without one)
     double ghost_share() const { return mesh_area > 0 ? ghost_area / mesh_area : 0.0; }
     std::vector<HeightBand> boundary_by_height;
 };
@@ -91,9 +94,29 @@ private:
     std::unordered_map<std::uint64_t, Eigen::Vector3d> cells_;
 };
 
-/// Evaluates a fused map. `gt` from MapGroundTruth, `crop` the same as config.max_distance's. Throws
-/// InvalidInput when the mesh has no triangle or nothing of it or of the GT remains in the crop.
+/// Where a drive's moving objects were at its scans' times: the boxes of their parts (the
+/// connected components of each frame's movers mesh), grown by `pad` metres. A box stands for its
+/// part: the simulator's parts are boxes and cylinders.
+class SweptVolume {
+public:
+    explicit SweptVolume(double pad = 0.2);
+    /// Adds one frame's moving objects (world frame; an empty mesh adds nothing).
+    void add(const Mesh& movers);
+    bool contains(const Eigen::Vector3d& p) const;
+    std::size_t boxes() const { return boxes_.size(); }
+
+private:
+    static constexpr double kCell = 2.0;  // metres: the x-y cells boxes are listed in
+    std::uint64_t cell_key(long x, long y) const;
+    double pad_;
+    std::vector<Eigen::AlignedBox3d> boxes_;
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
+};
+
+/// Evaluates a fused map. `gt` from MapGroundTruth, `crop` the same as config.max_distance's;
+/// `swept`, when given, the movers' volume (MapMetrics::path_ghost_area). Throws InvalidInput when
+/// the mesh has no triangle or nothing of it or of the GT remains in the crop.
 MapMetrics evaluate_map(const Mesh& mesh, const MeshDistance& truth, const std::vector<Eigen::Vector3d>& gt, const DriveCrop& crop,
-                        const MapEvaluationConfig& config);
+                        const MapEvaluationConfig& config, const SweptVolume* swept = nullptr);
 
 }  // namespace lidarsurf

@@ -40,8 +40,10 @@ public:
     /// Scan k in the sensor frame, as recorded. Read in order, the recording is streamed; an
     /// earlier k opens it again.
     RecordedScan scan(std::size_t k);
-    /// Scan k in the world frame: de-skewed when deskews(), else moved by pose(k).
-    PointCloud world_scan(std::size_t k);
+    /// Scan k in the world frame: de-skewed when deskews(), else moved by pose(k). `no_return`,
+    /// when given, receives the directions of its rays that returned nothing, turned by pose(k)
+    /// (RecordedScan::no_return; empty when the recording does not say).
+    PointCloud world_scan(std::size_t k, std::vector<Eigen::Vector3f>* no_return = nullptr);
     /// Scan k in the sensor frame at its stamp: de-skewed when deskews() (each point moved by
     /// pose(k)^-1 times the pose at its time), else as recorded.
     RecordedScan sensor_scan(std::size_t k);

@@ -6,8 +6,11 @@
 //
 // Each voxel keeps evidence counted in scans: the scans that put a point in it (hits) and the
 // scans that saw through it without hitting it (passes). A voxel with at least `min_scans` passes
-// and more passes than hits is removed from the grid (VoxelGrid::remove): its block counts as
-// touched, so an incremental extraction redoes the vertices it reached, as for a new point.
+// and more passes than hits (or hit by one scan only) is removed from the grid (VoxelGrid::remove):
+// its block counts as touched, so an incremental extraction redoes the vertices it reached, as for
+// a new point. A voxel no scan has hit for `stale_scans` scans goes after `stale_passes` passes
+// since its last hit, however many came before: a car parked long, gone, is not outweighed by
+// its past.
 //
 // "Saw through": the scan is a range image from its viewpoint (the nearest return per 0.2 x 0.4
 // degree pixel). Each occupied voxel within `range`, not hit by the scan, is tested against the
@@ -23,9 +26,18 @@
 //    on: the plane of the return's voxel, else the normal of the range image at the return, else
 //    the horizontal plane through the return. A far ring on the ground lies on the ground the
 //    ray returned on; a car's trail does not.
+//
+// A ray that returned nothing (the sensor says which: a recording's empty pixels, a simulated
+// drive's sensor pattern) saw free space up to the nearest return around it, `empty_range` at most:
+// the pixels it falls in, when no return does, get a return at that distance, with no surface
+// there. The guards: a pixel is empty only with the rays beside it in its row (a random dropout is
+// one ray); a dark surface that absorbs rays is framed by what returns around it, which ends the
+// free space in front of whatever stands behind it; and emptiness alone passes only a young or
+// stale voxel (a surface hit from many places and lately is not carved on emptiness).
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,9 +54,11 @@ namespace lidarsurf {
 #define LIDARSURF_CARVING_SETTINGS(X) \
     X(bool, carve, true, 0, 1, kClosed, 0, "carve", "", "", "Sequences: remove voxels that later rays went through, the trails of moving objects (0 = keep every point; a single scan is never carved)") \
     X(double, carve_margin_voxels, 2.0, 0.5, 1e3, kClosed, kKeep, "carve margin", "voxels", "", "Carving: a ray counts only if it returned this many voxels behind the voxel's surface") \
-    X(int, carve_min_scans, 2, 1, 65535, kClosed, kKeep, "carve min scans", "", "", "Carving: scans that must see through a voxel (and more than hit it) before it is removed") \
+    X(int, carve_min_scans, 1, 1, 65535, kClosed, kKeep, "carve min scans", "", "", "Carving: scans that must see through a voxel before it is removed (and more than hit it, when more than one did)") \
     X(double, carve_range, 40.0, 0, 1e4, kAboveLow, kKeep, "carve range", "m", "", "Carving: the voxels within this distance of each scan's sensor are tested against it (metres)") \
-    X(int, carve_stale_scans, 6, 0, 65535, kClosed, kKeep, "carve stale scans", "", "", "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its plane, as a surface that stood and is gone (0 = never)")
+    X(int, carve_stale_scans, 6, 0, 65535, kClosed, kKeep, "carve stale scans", "", "", "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its plane, as a surface that stood and is gone (0 = never)") \
+    X(int, carve_stale_passes, 6, 0, 65535, kClosed, kKeep, "carve stale passes", "", "", "Carving: a voxel no scan has hit for carve_stale_scans scans is removed after this many passes since its last hit, however many hits came before (0 = never)") \
+    X(double, carve_empty_range, 40.0, 0, 1e4, kClosed, kKeep, "carve empty range", "m", "", "Carving: a ray that returned nothing saw free space up to this distance (metres; 0 = rays that return nothing say nothing), when the input says which rays those were")
 // clang-format on
 
 struct CarvingConfig {
@@ -54,6 +68,7 @@ struct CarvingConfig {
 struct CarvingStats {
     std::size_t rays = 0;       ///< pixels of the range image
     std::size_t crossings = 0;  ///< voxel-return pairs tested (the return far enough behind the voxel)
+    std::size_t empty = 0;      ///< pixels empty of returns where the sensor fired (rays that returned nothing)
     std::size_t passes = 0;     ///< voxels given a pass this scan
     std::size_t removed = 0;    ///< voxels removed this scan
 };
@@ -72,9 +87,11 @@ public:
 
     /// After `grid.insert(points, viewpoint, &hits)` of one scan: counts the hits, tests the
     /// voxels within range against the scan's returns seen from `viewpoint` (world), counts the
-    /// passes and removes the voxels carved. `points` are the scan's points in world coordinates.
+    /// passes and removes the voxels carved. `points` are the scan's points in world coordinates;
+    /// `no_return` the unit directions (world) of the scan's rays that returned nothing, or empty
+    /// when the input does not say.
     CarvingStats carve(VoxelGrid& grid, std::span<const Eigen::Vector3d> points, std::span<const VoxelGrid::Hit> hits,
-                       const Eigen::Vector3d& viewpoint);
+                       const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3f> no_return = {});
 
     /// Counts `scans` scans that reach none of the grid's voxels (none of their returns, and
     /// so no ray, comes within their range of one): what carve() would do with them, without the
@@ -89,8 +106,9 @@ public:
     std::uint32_t scans() const { return scan_; }
     std::size_t memory_bytes() const {
         return evidence_.capacity() * sizeof(Evidence) + young_.capacity() * sizeof(VoxelKey) +
-               (pixel_of_.capacity() + nearest_.capacity() + young_slots_.capacity()) * sizeof(std::uint32_t) +
-               (depth_.capacity() + elevation_.capacity() + range2_.capacity()) * sizeof(float);
+               (pixel_of_.capacity() + nearest_.capacity() + young_slots_.capacity() + empty_ray_.capacity()) * sizeof(std::uint32_t) +
+               (depth_.capacity() + elevation_.capacity() + range2_.capacity()) * sizeof(float) + empty_.capacity() +
+               empty_points_.capacity() * sizeof(Eigen::Vector3d) + empty_seen_.capacity() * sizeof(std::pair<std::size_t, float>);
     }
 
     /// The evidence of voxel `voxel` (an index into the grid's stats()).
@@ -106,6 +124,7 @@ private:
         std::uint32_t last_hit = 0;   // scan number + 1 of the last hit (0: none)
         std::uint32_t last_pass = 0;  // scan number + 1 of the last pass (written atomically)
         Shape shape = Shape::None;
+        std::uint16_t since_hit = 0;  // passes since the last hit
         // Planar: the unit normal and the in-plane eigenvalues (regularised). Thick: unused.
         float normal[3] = {0, 0, 0};
         float lambda1 = 0, lambda2 = 0;
@@ -118,21 +137,34 @@ private:
     /// `p`: the return of `pixel`, local frame.
     bool off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, const Eigen::Vector3d& p,
                      std::uint32_t pixel) const;
+    /// Marks the pixels the rays in `no_return` fall in and no return does; gives each empty one
+    /// whose row neighbours are empty too a return at empty_range_ (empty_points_). Returns how many.
+    std::size_t empty_pixels(const Eigen::Vector3d& s, std::span<const Eigen::Vector3f> no_return);
     std::optional<Eigen::Vector3d> image_normal(std::span<const Eigen::Vector3d> points, std::uint32_t pixel) const;
 
     double margin_;
     int min_scans_;
     double range_;
     int stale_scans_;
+    int stale_passes_;
+    double empty_range_;
     double sigma2_;  // sigma0^2, set from the grid's voxel size
     std::uint32_t scan_ = 0;
     int rows_ = 0;  // rows of the range image of the scan being carved
+    float el_min_ = 0;  // the elevation of its first row (degrees)
+    std::size_t real_ = 0;  // its points: a nearest_ at or above this is an empty pixel's return
     std::vector<Evidence> evidence_;  // per voxel of the grid, by its index
     std::vector<VoxelKey> young_;            // the voxels hit by at most kYoungHits scans (keys: removals move indices)
     std::vector<std::uint32_t> young_slots_;  // their indices in this scan
     // The range image, kept from scan to scan (no page faults for fresh buffers).
     std::vector<std::uint32_t> pixel_of_, nearest_;
     std::vector<float> depth_, elevation_, range2_;  // per pixel; per point (elevation, squared range)
+    // Rays that returned nothing: per pixel, whether one fell in it; the returns given to the
+    // empty pixels (local frame), indexed by nearest_ - the scan's point count.
+    std::vector<std::uint8_t> empty_;
+    std::vector<std::uint32_t> empty_ray_;  // per pixel, the first such ray in it
+    std::vector<std::pair<std::size_t, float>> empty_seen_;  // the empty pixels kept, and how far their rays saw (squared)
+    std::vector<Eigen::Vector3d> empty_points_;
 };
 
 }  // namespace lidarsurf

@@ -33,6 +33,7 @@ struct SceneConfig {
     int cyclists = 0;         ///< town: bicycles beside the opposite lane, in the drive's direction (4-6.5 m/s)
     int leaving_cars = 0;     ///< town: cars parked at the curb that pull out and drive off, each at its time within the drive
     int parking_cars = 0;     ///< town: cars that drive in and park at the curb, each at its time within the drive
+    int dark_cars = 0;        ///< town: cars parked all along whose hull is too dark to return a ray (World::dark_mesh)
     double ego_speed = 8.0;   ///< m/s of the sensor rig along the path (sets the frame times)
     /// town: the drive weaves this many metres to either side of its lane, a sine of kWeaveWavelength
     /// (the rig turns: at 10 m/s and 1.5 m, up to 21 degrees a second); 0 drives straight.
@@ -68,7 +69,8 @@ struct Mover {
 
 struct World {
     SceneConfig config;
-    Mesh static_mesh;                ///< everything that does not move
+    Mesh static_mesh;                ///< everything that does not move and returns the sensor's rays
+    Mesh dark_mesh;                  ///< what does not move and returns no ray: the dark cars' hulls (below the sensor's threshold)
     std::vector<Mover> movers;
     std::vector<Eigen::Vector3d> path;  ///< ground points of the drive, in order (polyline)
 
@@ -82,10 +84,10 @@ struct World {
     double time_at(double s) const;
     /// The moving objects at time t, as one mesh (empty when there are none).
     Mesh movers_at(double t) const;
-    /// The whole scene at time t: static mesh + movers.
+    /// The whole scene at time t: static and dark meshes + movers.
     Mesh scene_at(double t) const;
-    /// What stands still at time t: the static mesh and the movers parked then. At the end of the
-    /// drive (time_at(1)), the scene a map of the drive should hold.
+    /// What stands still at time t: the static and dark meshes and the movers parked then. At the
+    /// end of the drive (time_at(1)), the scene a map of the drive should hold.
     Mesh standing_at(double t) const;
 };
 

@@ -2,6 +2,8 @@
 // Spinning multi-beam lidars as data: one ray per (beam elevation, azimuth step), Gaussian range
 // noise, random dropouts. Presets for common sensors; any sensor can be read from JSON.
 #include <cstdint>
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -9,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "lidarsurf/io/point_cloud.hpp"
+#include "lidarsurf/map/empty_rays.hpp"
 #include "lidarsurf/sim/ray_scene.hpp"
 
 namespace lidarsurf::sim {
@@ -54,7 +57,15 @@ struct SensorModel {
     /// InvalidArgument on bad values.
     static SensorModel from_json(std::string_view text);
     std::string to_json() const;
+
+    /// Its firing pattern: the beams' elevations and the azimuth step.
+    BeamPattern pattern() const { return {elevations_deg, azimuth_step_deg}; }
 };
+
+/// The pattern of the sensor of a drive `simulate` wrote, from its sensor.json (`path`); nullopt
+/// when there is no such file. Throws FormatError / InvalidArgument as from_json, IoError when it
+/// cannot be read.
+std::optional<BeamPattern> drive_pattern(const std::filesystem::path& path);
 
 /// Casts every ray of one revolution from a sensor at `pose` (sensor-to-world) and returns the
 /// noisy hits in the sensor frame (x forward, y left, z up). Deterministic for a given seed,

@@ -2,6 +2,7 @@
 // Drives a sensor through a World: frame i of n is taken at the fraction i / (n - 1) of the drive
 // (the paper's "100 equi-sampled frames"), with the moving objects where they are at that time.
 // Each frame has the noisy scan and, optionally, the co-located noise-free ground-truth scan.
+#include <optional>
 #include <cstdint>
 #include <vector>
 
@@ -57,6 +58,7 @@ private:
     World world_;
     SimulatorConfig config_;
     MeshScene static_scene_;
+    std::optional<MeshScene> dark_scene_;  // the world's dark surfaces: a ray that hits one first returns nothing
 };
 
 }  // namespace lidarsurf::sim

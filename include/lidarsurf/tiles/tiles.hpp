@@ -52,9 +52,11 @@ struct ScanReach {
     double radius = 0;                         ///< metres from the viewpoint to its farthest finite return
     Eigen::AlignedBox3d box;                   ///< its finite points (empty: none)
     std::optional<Eigen::Vector3d> first_point;  ///< its first finite point: a map's lattice origin comes from it
+    bool empty_rays = false;  ///< it says which of its rays returned nothing (carving takes them to carve_empty_range)
 };
-/// The reach of the scan `points` (world) seen from `viewpoint`.
-ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
+/// The reach of the scan `points` (world) seen from `viewpoint`; `empty_rays`: whether it comes
+/// with the rays that returned nothing.
+ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, bool empty_rays = false);
 
 struct TileKey {
     int x = 0, y = 0;  ///< the tile covers [x, x + 1) tile_size by [y, y + 1) tile_size (world metres)
@@ -114,6 +116,11 @@ private:
 /// tile's crop) or counted (TilePlan::reaches); then the mesh of the cubes the tile owns, in the
 /// world frame. `summary`, when given, gets the tile's counts and times.
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
+               ReconstructionSummary* summary = nullptr);
+/// The same, `scan(i, no_return)` also giving the directions (world) of scan i's rays that
+/// returned nothing (Reconstructor::integrate).
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile,
+               const std::function<std::vector<Eigen::Vector3d>(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
                ReconstructionSummary* summary = nullptr);
 
 /// The mesh of the cubes `tile` owns, from `rec`'s grid (world frame), which must hold every point
