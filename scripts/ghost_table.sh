@@ -14,7 +14,9 @@ drives_dir=${DRIVES_DIR:-$out/drives}
 mkdir -p "$out" "$drives_dir"
 default_drives="cars6:3:--moving-cars 6;cars6:11:--moving-cars 6;\
 walkers:4:--moving-cars 4 --pedestrians 10 --cyclists 4;walkers:12:--moving-cars 4 --pedestrians 10 --cyclists 4;\
-parking:5:--moving-cars 3 --leaving-cars 6 --parking-cars 4;parking:13:--moving-cars 3 --leaving-cars 6 --parking-cars 4"
+parking:5:--moving-cars 3 --leaving-cars 6 --parking-cars 4;parking:13:--moving-cars 3 --leaving-cars 6 --parking-cars 4;\
+cars6:31:--moving-cars 6;walkers:32:--moving-cars 4 --pedestrians 10 --cyclists 4;\
+parking:33:--moving-cars 3 --leaving-cars 6 --parking-cars 4;dark:34:--moving-cars 6 --pedestrians 6 --dark-cars 6"
 drives=${DRIVES:-$default_drives}
 rows=${ROWS:-default,no-carving${peer:+,vdbfusion-carving}}
 IFS=';' read -ra list <<<"$drives"
