@@ -115,14 +115,7 @@ PointCloud FuseInput::read(std::size_t n, const PointReadOptions& options, std::
     const Drive& d = drives[scans[n].drive];
     if (d.recording) return d.recording->world_scan(scans[n].frame, no_return);
     PointCloud cloud = read_points(d.seq.scan(scans[n].frame), options);
-    if (no_return) {
-        no_return->clear();
-        if (d.pattern) {
-            const Eigen::Matrix3f turn = pose(n).linear().cast<float>();
-            *no_return = empty_rays(*d.pattern, cloud.points);
-            for (Eigen::Vector3f& u : *no_return) u = turn * u;
-        }
-    }
+    if (no_return) *no_return = d.pattern ? empty_rays(*d.pattern, cloud.points, pose(n).linear()) : std::vector<Eigen::Vector3f>{};
     for (Eigen::Vector3d& p : cloud.points) p = pose(n) * p;  // NaN stays NaN
     return cloud;
 }

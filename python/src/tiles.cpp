@@ -98,14 +98,7 @@ struct Sequence {
         if (drive) return drive->world_scan(frames[n], no_return).points;
         PointCloud cloud = read_points(seq->scan(frames[n]));
         const Eigen::Isometry3d& pose = poses[frames[n]];
-        if (no_return) {
-            no_return->clear();
-            if (pattern) {
-                *no_return = empty_rays(*pattern, cloud.points);
-                const Eigen::Matrix3f turn = pose.linear().cast<float>();
-                for (Eigen::Vector3f& u : *no_return) u = turn * u;
-            }
-        }
+        if (no_return) *no_return = pattern ? empty_rays(*pattern, cloud.points, pose.linear()) : std::vector<Eigen::Vector3f>{};
         for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN
         return std::move(cloud.points);
     }

@@ -48,4 +48,11 @@ std::vector<Eigen::Vector3f> empty_rays(const BeamPattern& pattern, std::span<co
     return out;
 }
 
+std::vector<Eigen::Vector3f> empty_rays(const BeamPattern& pattern, std::span<const Eigen::Vector3d> points, const Eigen::Matrix3d& turn) {
+    std::vector<Eigen::Vector3f> rays = empty_rays(pattern, points);
+    const Eigen::Matrix3f t = turn.cast<float>();
+    for (Eigen::Vector3f& u : rays) u = t * u;
+    return rays;
+}
+
 }  // namespace lidarsurf

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/pipeline.hpp"
@@ -53,22 +54,13 @@ std::size_t triangles_in(const Mesh& m, const Box& b, double grow = 0, double z_
     return n;
 }
 
-// The map of a 40-scan drive with `boxes_at(i)` standing in the street at scan i, carved or not.
-// Both are 40 scans long: a voxel gone stale is removed after three passes (carve_stale_passes)
-// instead of six, what a 150-scan drive gives it time for.
+// The drives below are 40 scans long: a voxel gone stale is removed after three passes
+// (carve_stale_passes) instead of six, what a 150-scan drive gives it time for.
 constexpr int kStalePasses = 3;
-template <typename F>
-Mesh fused(bool carve, F&& boxes_at) {
-    ReconstructionConfig c;
-    c.carve = carve;
-    c.carve_stale_passes = kStalePasses;
-    Reconstructor rec(c, sensor_at(0));
-    for (int i = 0; i < 40; ++i) rec.integrate(scan_with(i, boxes_at(i)), sensor_at(i));
-    return rec.extract_mesh();
-}
 
-// The same drive with the scans saying which of their rays returned nothing (`empty_rays`), the
-// `dark` boxes absorbing what hits them and `dropout` of the returns lost at random.
+// The map of a 40-scan drive with `boxes_at(i)` standing in the street at scan i, carved or not,
+// the scans saying which of their rays returned nothing (`empty_rays`), the `dark` boxes absorbing
+// what hits them and `dropout` of the returns lost at random.
 template <typename F>
 Mesh fused_with_rays(bool carve, F&& boxes_at, const std::vector<Box>& dark = {}, double dropout = 0, bool empty_rays = true) {
     ReconstructionConfig c;
@@ -81,6 +73,12 @@ Mesh fused_with_rays(bool carve, F&& boxes_at, const std::vector<Box>& dark = {}
         rec.integrate(points, sensor_at(i), no_return);
     }
     return rec.extract_mesh();
+}
+
+// The same with returns only.
+template <typename F>
+Mesh fused(bool carve, F&& boxes_at) {
+    return fused_with_rays(carve, std::forward<F>(boxes_at), {}, 0, false);
 }
 
 }  // namespace

@@ -22,5 +22,7 @@ struct BeamPattern {
 /// frame, returns from the origin; non-finite ones skipped) falls in: each point counts for the beam
 /// of the nearest elevation and the nearest azimuth step.
 std::vector<Eigen::Vector3f> empty_rays(const BeamPattern& pattern, std::span<const Eigen::Vector3d> points);
+/// The same, each direction turned by `turn` (a scan's pose: the directions in the world frame).
+std::vector<Eigen::Vector3f> empty_rays(const BeamPattern& pattern, std::span<const Eigen::Vector3d> points, const Eigen::Matrix3d& turn);
 
 }  // namespace lidarsurf
