@@ -46,7 +46,8 @@ FreeSpaceCarver::FreeSpaceCarver(const CarvingConfig& config, double voxel_size)
       stale_scans_(config.carve_stale_scans),
       stale_passes_(config.carve_stale_passes),
       empty_range_(config.carve_empty_range),
-      sigma2_(0) {
+      sigma2_(0),
+      clusters_(config.carve_cluster_share, voxel_size) {
     if (!std::isfinite(voxel_size) || voxel_size <= 0) throw InvalidArgument("carving: voxel size must be finite and > 0");
 }
 
@@ -398,7 +399,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     for (const auto& mine : passed) pass.insert(pass.end(), mine.begin(), mine.end());
     std::sort(pass.begin(), pass.end());
     out.passes = pass.size();
-    std::vector<std::uint32_t> carved;
+    std::vector<std::uint32_t> carved;  // increasing
     for (std::uint32_t v : pass) {
         Evidence& e = evidence_[v];
         if (e.passes < UINT16_MAX) ++e.passes;
@@ -407,12 +408,31 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
         if ((e.passes >= min_scans_ && (e.passes > e.hits || e.hits <= 1)) || (stale_passes_ > 0 && stale && e.since_hit >= stale_passes_))
             carved.push_back(v);
     }
-    for (auto it = carved.rbegin(); it != carved.rend(); ++it) {
-        const std::size_t moved = grid.remove(*it);
-        evidence_[*it] = evidence_[moved];
-        evidence_.pop_back();
-    }
+    // 4. The rest of the clusters mostly carved (map/carved_clusters.hpp), found after the
+    //    removals: the voxels removed are tombstones, the seeds those above the ground.
+    const auto last_hit = [&](std::size_t v) { return evidence_[v].last_hit; };
+    const auto mean_z = [&](std::size_t v) { return evidence_[v].mean[2]; };
+    clusters_.add_ground(grid, before, mean_z);
+    std::vector<VoxelKey> seeds;
+    const auto remove = [&](const std::vector<std::uint32_t>& gone, std::vector<VoxelKey>* buried) {  // gone: increasing
+        for (const std::uint32_t v : gone) {
+            const VoxelKey& key = grid.keys()[v];
+            if (clusters_.bury(key, evidence_[v].mean[2], evidence_[v].last_hit, stamp) && buried) buried->push_back(key);
+        }
+        for (auto it = gone.rbegin(); it != gone.rend(); ++it) {
+            const std::size_t moved = grid.remove(*it);
+            evidence_[*it] = evidence_[moved];
+            evidence_.pop_back();
+        }
+    };
+    remove(carved, &seeds);
     out.removed = carved.size();
+    if (!seeds.empty()) {
+        const std::vector<std::uint32_t> rest = clusters_.follow(grid, seeds, stamp, last_hit, mean_z);
+        remove(rest, nullptr);
+        out.clustered = rest.size();
+        out.removed += rest.size();
+    }
     return out;
 }
 

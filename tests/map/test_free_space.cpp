@@ -62,10 +62,12 @@ constexpr int kStalePasses = 3;
 // the scans saying which of their rays returned nothing (`empty_rays`), the `dark` boxes absorbing
 // what hits them and `dropout` of the returns lost at random.
 template <typename F>
-Mesh fused_with_rays(bool carve, F&& boxes_at, const std::vector<Box>& dark = {}, double dropout = 0, bool empty_rays = true) {
+Mesh fused_with_rays(bool carve, F&& boxes_at, const std::vector<Box>& dark = {}, double dropout = 0, bool empty_rays = true,
+                     double cluster_share = CarvingConfig{}.carve_cluster_share) {
     ReconstructionConfig c;
     c.carve = carve;
     c.carve_stale_passes = kStalePasses;
+    c.carve_cluster_share = cluster_share;
     Reconstructor rec(c, sensor_at(0));
     for (int i = 0; i < 40; ++i) {
         std::vector<Eigen::Vector3f> no_return;
@@ -276,11 +278,15 @@ TEST(FreeSpace, SkippingScansThatReachNothingIsCarvingThem) {
 
 // A van taller than the sensor parked for the first half of the drive on the side with no wall,
 // then gone, the scans saying which rays returned nothing: the rays through the upper half of its
-// side go up, to the sky, and return nothing, so only they see through it there.
+// side go up, to the sky, and return nothing, so only they see through it there (clusters off:
+// they would take the rest of it too, see below).
+const Box kVanGone{{8.0, -3.9, 0.0}, {13.0, -2.1, 2.4}}, kCarStays{{20.0, 2.1, 0.0}, {24.5, 3.9, 1.5}};
+std::vector<Box> van_then_car(int i) { return i < 20 ? std::vector<Box>{kCarStays, kVanGone} : std::vector<Box>{kCarStays}; }
+
 TEST(FreeSpace, RaysThatReturnNothingCarveTheUpperSideOfAVanThatLeft) {
-    const Box gone{{8.0, -3.9, 0.0}, {13.0, -2.1, 2.4}}, stays{{20.0, 2.1, 0.0}, {24.5, 3.9, 1.5}};
-    const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{stays, gone} : std::vector<Box>{stays}; };
-    const Mesh carved = fused_with_rays(true, boxes), returns_only = fused_with_rays(true, boxes, {}, 0, false),
+    const Box &gone = kVanGone, &stays = kCarStays;
+    const auto boxes = van_then_car;
+    const Mesh carved = fused_with_rays(true, boxes, {}, 0, true, 1.0), returns_only = fused_with_rays(true, boxes, {}, 0, false, 1.0),
                kept = fused_with_rays(false, boxes);
     const Box upper{{8.0, -3.9, 1.8}, {13.0, -2.1, 2.5}};
     const std::size_t before = triangles_in(kept, gone, 0.1, 0.3);
@@ -295,6 +301,28 @@ TEST(FreeSpace, RaysThatReturnNothingCarveTheUpperSideOfAVanThatLeft) {
     EXPECT_GE(triangles_in(carved, pole), triangles_in(kept, pole) * 98 / 100);
     const Box wall{{-5.0, kWallY - 0.2, 0.3}, {30.0, kWallY + 0.2, 5.0}};
     EXPECT_GE(triangles_in(carved, wall), triangles_in(kept, wall) * 98 / 100);
+}
+
+// The same van, returns only: the rays that return behind it carve its lower side, none sees
+// through the upper one, and the cluster that is left, mostly carved, goes whole. The car that
+// stays, the pole and the wall are not taken with it.
+TEST(FreeSpace, TheRestOfAMostlyCarvedVanGoesWithIt) {
+    const auto boxes = van_then_car;
+    const Mesh clusters = fused_with_rays(true, boxes, {}, 0, false), no_clusters = fused_with_rays(true, boxes, {}, 0, false, 1.0),
+               kept = fused_with_rays(false, boxes);
+    const std::size_t before = triangles_in(kept, kVanGone, 0.1, 0.3);
+    ASSERT_GT(before, 300u);
+    ASSERT_GT(triangles_in(no_clusters, kVanGone, 0.1, 0.3), before / 10) << "without clusters, the upper side stays";
+    EXPECT_LE(triangles_in(clusters, kVanGone, 0.1, 0.3), before / 20) << "5 % at most of the van that left stays";
+    const std::size_t on_car_kept = triangles_in(kept, kCarStays, 0.1, 0.2);
+    ASSERT_GT(on_car_kept, 300u);
+    EXPECT_GE(triangles_in(clusters, kCarStays, 0.1, 0.2), on_car_kept * 98 / 100);
+    const Box pole{{kPoleX - 0.25, kPoleY - 0.25, 0.3}, {kPoleX + 0.25, kPoleY + 0.25, 5.5}};
+    EXPECT_GE(triangles_in(clusters, pole), triangles_in(kept, pole) * 98 / 100);
+    const Box wall{{-5.0, kWallY - 0.2, 0.3}, {30.0, kWallY + 0.2, 5.0}};
+    EXPECT_GE(triangles_in(clusters, wall), triangles_in(kept, wall) * 98 / 100);
+    const Box ground{{-5.0, -8.0, -0.2}, {30.0, 8.0, 0.2}};
+    EXPECT_GE(triangles_in(clusters, ground), triangles_in(kept, ground) * 98 / 100);
 }
 
 // A car parked all along whose hull returns nothing (too dark), its cabin returning, between the
@@ -316,14 +344,22 @@ TEST(FreeSpace, ADarkCarTheWallBehindItAndRandomDropoutsStay) {
     EXPECT_GE(triangles_in(carved, pole), triangles_in(kept, pole) * 98 / 100);
 }
 
-// Two cars parked nose to tail (0.6 m apart); the first leaves halfway: the other stays whole.
+// Two cars parked nose to tail, 0.6 m apart, then 0.2 m (their voxels touch: one cluster); the
+// first leaves halfway: the other stays whole, in both, returns only or with the empty rays.
 TEST(FreeSpace, OfTwoCarsParkedSideBySideTheOneThatStaysIsWhole) {
-    const Box leaves{{8.0, 2.1, 0.0}, {12.5, 3.9, 1.5}}, stays{{13.1, 2.1, 0.0}, {17.6, 3.9, 1.5}};
-    const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{leaves, stays} : std::vector<Box>{stays}; };
-    const Mesh carved = fused_with_rays(true, boxes), kept = fused_with_rays(false, boxes);
-    const Box where_it_stood{{8.0, 2.1, 0.3}, {12.3, 3.9, 1.6}};
-    EXPECT_LE(triangles_in(carved, where_it_stood), triangles_in(kept, where_it_stood) / 20);
-    const std::size_t on_car = triangles_in(kept, stays, 0.1, 0.2);
-    ASSERT_GT(on_car, 300u);
-    EXPECT_GE(triangles_in(carved, stays, 0.1, 0.2), on_car * 98 / 100);
+    for (const double gap : {0.6, 0.2}) {
+        const Box leaves{{8.0, 2.1, 0.0}, {12.5, 3.9, 1.5}}, stays{{12.5 + gap, 2.1, 0.0}, {17.0 + gap, 3.9, 1.5}};
+        const auto boxes = [&](int i) { return i < 20 ? std::vector<Box>{leaves, stays} : std::vector<Box>{stays}; };
+        const Mesh kept = fused_with_rays(false, boxes);
+        const std::size_t on_car = triangles_in(kept, stays, 0.1, 0.2);
+        ASSERT_GT(on_car, 300u);
+        for (const bool rays : {true, false}) {
+            const Mesh carved = fused_with_rays(true, boxes, {}, 0, rays);
+            EXPECT_GE(triangles_in(carved, stays, 0.1, 0.2), on_car * 98 / 100) << "gap " << gap << (rays ? ", empty rays" : ", returns only");
+            if (gap > 0.5 && rays) {
+                const Box where_it_stood{{8.0, 2.1, 0.3}, {12.3, 3.9, 1.6}};
+                EXPECT_LE(triangles_in(carved, where_it_stood), triangles_in(kept, where_it_stood) / 20);
+            }
+        }
+    }
 }

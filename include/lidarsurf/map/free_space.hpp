@@ -34,6 +34,10 @@
 // one ray); a dark surface that absorbs rays is framed by what returns around it, which ends the
 // free space in front of whatever stands behind it; and emptiness alone passes only a young or
 // stale voxel (a surface hit from many places and lately is not carved on emptiness).
+//
+// What no ray reaches stays when the rest of its object is carved (a car's roof at the sensor's
+// height): the remnant of a cluster mostly carved goes with it (map/carved_clusters.hpp,
+// `cluster_share`).
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -44,6 +48,7 @@
 
 #include "lidarsurf/core/setting.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
+#include "lidarsurf/map/carved_clusters.hpp"
 
 namespace lidarsurf {
 
@@ -58,7 +63,8 @@ namespace lidarsurf {
     X(double, carve_range, 40.0, 0, 1e4, kAboveLow, kKeep, "carve range", "m", "", "Carving: the voxels within this distance of each scan's sensor are tested against it (metres)") \
     X(int, carve_stale_scans, 6, 0, 65535, kClosed, kKeep, "carve stale scans", "", "", "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its plane, as a surface that stood and is gone (0 = never)") \
     X(int, carve_stale_passes, 6, 0, 65535, kClosed, kKeep, "carve stale passes", "", "", "Carving: a voxel no scan has hit for carve_stale_scans scans is removed after this many passes since its last hit, however many hits came before (0 = never)") \
-    X(double, carve_empty_range, 40.0, 0, 1e4, kClosed, kKeep, "carve empty range", "m", "", "Carving: a ray that returned nothing saw free space up to this distance (metres; 0 = rays that return nothing say nothing), when the input says which rays those were")
+    X(double, carve_empty_range, 40.0, 0, 1e4, kClosed, kKeep, "carve empty range", "m", "", "Carving: a ray that returned nothing saw free space up to this distance (metres; 0 = rays that return nothing say nothing), when the input says which rays those were") \
+    X(double, carve_cluster_share, 0.5, 0, 1, kAboveLow, kKeep, "carve cluster share", "", "", "Carving: a cluster above the ground goes whole when at least this share of it was carved (1 = never)")
 // clang-format on
 
 struct CarvingConfig {
@@ -71,6 +77,7 @@ struct CarvingStats {
     std::size_t empty = 0;      ///< pixels empty of returns where the sensor fired (rays that returned nothing)
     std::size_t passes = 0;     ///< voxels given a pass this scan
     std::size_t removed = 0;    ///< voxels removed this scan
+    std::size_t clustered = 0;  ///< of them, the rest of mostly carved clusters
 };
 
 class FreeSpaceCarver {
@@ -108,7 +115,8 @@ public:
         return evidence_.capacity() * sizeof(Evidence) + young_.capacity() * sizeof(VoxelKey) +
                (pixel_of_.capacity() + nearest_.capacity() + young_slots_.capacity() + empty_ray_.capacity()) * sizeof(std::uint32_t) +
                (depth_.capacity() + elevation_.capacity() + range2_.capacity()) * sizeof(float) + empty_.capacity() +
-               empty_points_.capacity() * sizeof(Eigen::Vector3d) + empty_seen_.capacity() * sizeof(std::pair<std::size_t, float>);
+               empty_points_.capacity() * sizeof(Eigen::Vector3d) + empty_seen_.capacity() * sizeof(std::pair<std::size_t, float>) +
+               clusters_.memory_bytes();
     }
 
     /// The evidence of voxel `voxel` (an index into the grid's stats()).
@@ -165,6 +173,7 @@ private:
     std::vector<std::uint32_t> empty_ray_;  // per pixel, the first such ray in it
     std::vector<std::pair<std::size_t, float>> empty_seen_;  // the empty pixels kept, and how far their rays saw (squared)
     std::vector<Eigen::Vector3d> empty_points_;
+    CarvedClusters clusters_;
 };
 
 }  // namespace lidarsurf
