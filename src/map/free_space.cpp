@@ -417,7 +417,7 @@ CarvingStats FreeSpaceCarver::carve(VoxelGrid& grid, std::span<const Eigen::Vect
     const auto remove = [&](const std::vector<std::uint32_t>& gone, std::vector<VoxelKey>* buried) {  // gone: increasing
         for (const std::uint32_t v : gone) {
             const VoxelKey& key = grid.keys()[v];
-            if (clusters_.bury(key, evidence_[v].mean[2], evidence_[v].last_hit, stamp) && buried) buried->push_back(key);
+            if (clusters_.bury(key, mean_z(v), last_hit(v), stamp) && buried) buried->push_back(key);
         }
         for (auto it = gone.rbegin(); it != gone.rend(); ++it) {
             const std::size_t moved = grid.remove(*it);
