@@ -10,6 +10,7 @@ PKGS=(
   libnanoflann-dev     # kd-tree (IMLS, evaluation)
   libcli11-dev         # command-line parsing
   liblzf-dev           # PCD binary_compressed (LZF)
+  libmeshoptimizer-dev # mesh simplification (--simplify)
   libgtest-dev         # unit tests
   libbenchmark-dev     # micro-benchmarks
   libembree-dev        # ray casting: simulator and renderer

@@ -13,6 +13,7 @@
 #include "lidarsurf/core/packed_voxels.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/mesh/mesh_filter.hpp"
+#include "lidarsurf/mesh/simplify.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 #include "lidarsurf/core/format_value.hpp"
@@ -201,6 +202,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
             }
         }
         remove_small_components(mesh, static_cast<std::size_t>(config_.min_component_triangles));
+        simplify_mesh(mesh, config_.simplify);
         summary_.seconds_mesh = seconds_since(t0);
     });
     summary_.mesh_vertices = mesh.vertices.size();
@@ -222,6 +224,7 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
         const auto t0 = std::chrono::steady_clock::now();
         std::erase_if(seeded.cubes, [&](const VoxelKey& cube) { return !owns(cube); });
         mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, vertex_placement());
+        simplify_mesh(mesh, config_.simplify);  // the seams are the part's borders: kept
         summary_.seconds_mesh = seconds_since(t0);
     });
     summary_.mesh_vertices = mesh.vertices.size();

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -140,6 +141,19 @@ inline void expect_identical(const Mesh& m, const Mesh& expected, const std::str
     for (std::size_t i = 0; i < m.triangles.size(); ++i) ASSERT_EQ(m.triangles[i], expected.triangles[i]) << what;
     EXPECT_EQ(m.normals, expected.normals) << what;
     EXPECT_EQ(m.confidence, expected.confidence) << what;
+}
+
+// The mesh's open edges (in one triangle only), as pairs of positions, the smaller first.
+using PositionEdge = std::pair<std::array<double, 3>, std::array<double, 3>>;
+inline std::set<PositionEdge> open_edges(const Mesh& m) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+    for (const auto& t : m.triangles)
+        for (int e = 0; e < 3; ++e) ++uses[std::minmax(t[e], t[(e + 1) % 3])];
+    auto at = [&](std::uint32_t v) { return std::array<double, 3>{m.vertices[v].x(), m.vertices[v].y(), m.vertices[v].z()}; };
+    std::set<PositionEdge> out;
+    for (const auto& [edge, count] : uses)
+        if (count == 1) out.insert(std::minmax(at(edge.first), at(edge.second)));
+    return out;
 }
 
 }  // namespace lidarsurf::test

@@ -1,6 +1,8 @@
 #include "lidarsurf/mesh/mesh.hpp"
 
+#include <cstdint>
 #include <string>
+#include <utility>
 
 #include <Eigen/Geometry>
 
@@ -54,6 +56,30 @@ void Mesh::append(const Mesh& part, std::span<const std::int64_t> existing) {
         if (!part.confidence.empty()) confidence.push_back(part.confidence[i]);
     }
     for (const auto& t : part.triangles) triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+}
+
+void Mesh::keep_triangles(std::vector<std::array<std::uint32_t, 3>> kept) {
+    constexpr std::uint32_t kUnused = UINT32_MAX;
+    std::vector<std::uint32_t> remap(vertices.size(), kUnused);
+    for (const auto& t : kept)
+        for (std::uint32_t v : t) remap[v] = 0;
+    std::uint32_t next = 0;
+    for (std::size_t v = 0; v < remap.size(); ++v) {
+        if (remap[v] == kUnused) continue;
+        remap[v] = next;
+        vertices[next] = vertices[v];
+        if (!normals.empty()) normals[next] = normals[v];
+        if (!levels.empty()) levels[next] = levels[v];
+        if (!confidence.empty()) confidence[next] = confidence[v];
+        ++next;
+    }
+    vertices.resize(next);
+    if (!normals.empty()) normals.resize(next);
+    if (!levels.empty()) levels.resize(next);
+    if (!confidence.empty()) confidence.resize(next);
+    for (auto& t : kept)
+        for (std::uint32_t& v : t) v = remap[v];
+    triangles = std::move(kept);
 }
 
 }  // namespace lidarsurf

@@ -46,29 +46,7 @@ std::size_t remove_small_components(Mesh& mesh, std::size_t min_triangles) {
         if (triangles_of[sets.find(t[0])] >= min_triangles) kept.push_back(t);
     const std::size_t removed = mesh.triangles.size() - kept.size();
     if (removed == 0) return 0;
-
-    // Compact the vertices (and their attributes) that a kept triangle uses.
-    constexpr std::uint32_t kUnused = UINT32_MAX;
-    std::vector<std::uint32_t> remap(mesh.vertices.size(), kUnused);
-    for (const auto& t : kept)
-        for (std::uint32_t v : t) remap[v] = 0;
-    std::uint32_t next = 0;
-    for (std::size_t v = 0; v < remap.size(); ++v) {
-        if (remap[v] == kUnused) continue;
-        remap[v] = next;
-        mesh.vertices[next] = mesh.vertices[v];
-        if (!mesh.normals.empty()) mesh.normals[next] = mesh.normals[v];
-        if (!mesh.levels.empty()) mesh.levels[next] = mesh.levels[v];
-        if (!mesh.confidence.empty()) mesh.confidence[next] = mesh.confidence[v];
-        ++next;
-    }
-    mesh.vertices.resize(next);
-    if (!mesh.normals.empty()) mesh.normals.resize(next);
-    if (!mesh.levels.empty()) mesh.levels.resize(next);
-    if (!mesh.confidence.empty()) mesh.confidence.resize(next);
-    for (auto& t : kept)
-        for (std::uint32_t& v : t) v = remap[v];
-    mesh.triangles = std::move(kept);
+    mesh.keep_triangles(std::move(kept));
     return removed;
 }
 

@@ -132,6 +132,24 @@ TEST(Tiles, TheTilesMeshIsTheWholeMapsMesh) {
     expect_tiles_equal_the_whole_map(test::town_drive(), tiles, 5);
 }
 
+TEST(Tiles, SimplifiedTilesKeepTheirSeamsClosed) {
+    // Each part keeps its border vertices in place (mesh/simplify.hpp), so the seams weld as
+    // unsimplified: the welded map has no open edge that the unsimplified tiles' map has not.
+    TileConfig tiles;
+    tiles.tile_size = 30;
+    const std::vector<test::Scan>& drive = test::town_drive();
+    ReconstructionConfig simplified;
+    simplified.simplify = 0.02;
+    const TilePlan plan = plan_of(drive, ReconstructionConfig{}, tiles);
+    ASSERT_GE(plan.tiles().size(), 5u);
+    Tiled full = tiles_of(*whole_map(drive, ReconstructionConfig{}), plan), simple = tiles_of(*whole_map(drive, simplified), plan);
+    EXPECT_LT(simple.mesh.triangles.size(), full.mesh.triangles.size() / 2);
+    const auto full_open = test::open_edges(full.mesh);
+    std::size_t opened = 0;
+    for (const auto& e : test::open_edges(simple.mesh)) opened += !full_open.count(e);
+    EXPECT_EQ(opened, 0u) << "open edges the unsimplified tiles' map has not: a seam opened";
+}
+
 TEST(Tiles, ScansThatCannotReachATileAreCountedNotIntegrated) {
     TileConfig tiles;
     tiles.tile_size = 25;

@@ -29,6 +29,9 @@ struct Mesh {
     /// this mesh's vertex of that index and is not appended again; the others are appended in
     /// order (the numbering of MeshStreamWriter::append and SeamWelder::weld).
     void append(const Mesh& part, std::span<const std::int64_t> existing);
+    /// Replaces the triangles by `kept` (indices into this mesh's vertices), then drops the
+    /// vertices no kept triangle uses; attributes follow their vertices, whose order is unchanged.
+    void keep_triangles(std::vector<std::array<std::uint32_t, 3>> kept);
 };
 
 }  // namespace lidarsurf

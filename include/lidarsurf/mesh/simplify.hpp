@@ -1,0 +1,18 @@
+#pragma once
+// Simplification of an extracted mesh: triangles merged wherever the surface stays within a
+// distance of the full mesh (meshoptimizer's quadric edge collapse, meshopt_simplify).
+#include <cstddef>
+
+#include "lidarsurf/mesh/mesh.hpp"
+
+namespace lidarsurf {
+
+/// Collapses edges of `mesh` while the surface stays within `max_error` metres of it
+/// (meshoptimizer's quadric error, converted from metres with meshopt_simplifyScale). Vertices on
+/// a border (an edge of one triangle: the mesh's outline, its holes, a tile's seam) are neither
+/// moved nor removed, so the outline stays and no seam between tiles opens. What is kept is a subset of the vertices,
+/// unmoved, with their attributes (normals, levels, confidence), in their order; triangles keep
+/// their orientation. max_error <= 0 leaves the mesh as it is. Returns the triangles removed.
+std::size_t simplify_mesh(Mesh& mesh, double max_error);
+
+}  // namespace lidarsurf
