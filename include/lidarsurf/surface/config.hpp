@@ -57,7 +57,7 @@ inline constexpr int kMaxReach = 64;
     X(double, bridge_range, 30.0, 0, 1e4, kClosed, kKeep, "bridge range", "m", "", "Bridges are tried within this horizontal distance of the sensor (metres)") \
     X(bool, snap_to_plane, true, 0, 1, kClosed, 0, "snap to plane", "", "--snap", "Move mesh vertices onto the plane of the nearer lattice vertex of their edge (0 = interpolate; docs/method.md, \"Snapping\")") \
     X(int, min_component_triangles, 0, 0, kNoLimit, kClosed, 0, "min component triangles", "", "--min-component", "Drop mesh pieces with fewer triangles (0 = keep all)") \
-    X(double, simplify, 0.0, 0, 1e3, kClosed, kKeep, "simplify", "m", "", "Merge triangles wherever the surface stays within this many metres of the full mesh, borders and tile seams kept (0 = off; docs/method.md, \"Simplification\")") \
+    X(double, simplify, 0.0, 0, 1e3, kClosed, kKeep, "simplify", "m", "", "Merge triangles wherever the surface stays about within this many metres of the full mesh, borders and tile seams kept (0 = off; docs/method.md, \"Simplification\")") \
     X(double, truncation_voxels, 1.05, 0.8660254037844386, kNoLimit, kZeroIsOff, 0, "truncation", "voxels", "--truncation", "TSDF truncation in voxels; below sqrt(3)/2 it would cut surfaces crossing a cube (0 = none; docs/method.md, \"Truncation\")") \
     X(bool, seeded_surface, true, 0, 1, kClosed, 0, "seeded surface", "", "--seeded", "Keep only the surface connected to the data (0 = every cube with defined corners; docs/method.md, \"Seeded surface\")") \
     X(int, seed_dilation, 0, 0, kMaxNeighbourhoodLevel, kClosed, kKeep, "seed dilation", "", "", "Seed cubes within this many cubes of an occupied voxel")
