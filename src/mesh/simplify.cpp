@@ -34,10 +34,9 @@ std::size_t simplify_mesh(Mesh& mesh, double max_error) {
     const float scale = meshopt_simplifyScale(positions.data(), mesh.vertices.size(), kStride);
     if (!(scale > 0)) return 0;  // every vertex at one point
     std::vector<unsigned int> kept(indices.size());
-    float reached = 0;
     // Target 0 triangles: as far as the error allows.
     const std::size_t count = meshopt_simplify(kept.data(), indices.data(), indices.size(), positions.data(), mesh.vertices.size(), kStride, 0,
-                                               static_cast<float>(kTargetShare * max_error / scale), meshopt_SimplifyLockBorder, &reached);
+                                               static_cast<float>(kTargetShare * max_error / scale), meshopt_SimplifyLockBorder, nullptr);
     std::vector<std::array<std::uint32_t, 3>> triangles(count / 3);
     for (std::size_t i = 0; i < triangles.size(); ++i) triangles[i] = {kept[3 * i], kept[3 * i + 1], kept[3 * i + 2]};
     const std::size_t removed = mesh.triangles.size() - triangles.size();
