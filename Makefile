@@ -152,14 +152,17 @@ package-check: build
 	$(BUILD)/pkg-consumer/consumer_recording
 	bash tests/package/readme_consumer.sh $(BUILD)
 
-# The viewer's pages in headless Chromium (Debian's chromium and, to drive it, playwright-core from
-# npm, both installed by `setup.sh viewer`): the page `lidarsurf view` writes, coloured by height and
+# The viewer's pages in headless Chromium (Debian's chromium and, to drive it, playwright-core and
+# the glTF validator from npm, all installed by `setup.sh viewer`): the page `lidarsurf view` writes, coloured by height and
 # by level (scripts/viewer_check.sh); the live view of `fuse --serve` on a short drive, mid-drive,
-# later and final, the page's final mesh against fuse's output (scripts/live_view_check.sh).
+# later and final, the page's final mesh against fuse's output (scripts/live_view_check.sh); binary
+# glTF of a scan, a map and a tiled map through the Khronos validator and three.js's GLTFLoader and
+# DRACOLoader (scripts/gltf_check.sh).
 viewer-check: build
 	@bash scripts/setup.sh viewer
 	bash scripts/viewer_check.sh $(BUILD)/bin/lidarsurf $(CURDIR)/$(BUILD)/viewer-check
 	bash scripts/live_view_check.sh $(BUILD)/bin/lidarsurf $(CURDIR)/$(BUILD)/live-view-check
+	bash scripts/gltf_check.sh $(BUILD)/bin/lidarsurf $(BUILD)/python $(CURDIR)/$(BUILD)/gltf-check
 
 # A clone built as a new user builds it (plain cmake, no setup.sh, so no three.js): the CLI builds
 # with the viewer left out, and `lidarsurf view` and `fuse --serve` exit 2 saying how to add it.

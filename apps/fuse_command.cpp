@@ -43,7 +43,7 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
                   "Several: drives whose poses share one world frame, fused one after the other into one map")
         ->required();
     f->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj), in the world frame")->required();
-    f->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj")->capture_default_str();
+    f->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj | glb | glb-draco (binary glTF, Draco-compressed)")->capture_default_str();
     f->add_option("--poses", o.poses,
                   "Pose file (KITTI format, one 3x4 sensor-to-world pose a line), e.g. from your odometry; the lidar's "
                   "unless --calib is given");

@@ -29,7 +29,7 @@ CLI::App* add_reconstruct_command(CLI::App& app, ReconstructCommandOptions& o) {
         ->check(CLI::NonNegativeNumber)->excludes(scan);
     add_recording_options(rc, o.recording);
     rc->add_option("-o,--output", o.output, "Output mesh (.ply binary by default, .obj)")->required();
-    rc->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj")->capture_default_str();
+    rc->add_option("--mesh-format", o.mesh_format, "Output format: auto | ply | ply-ascii | obj | glb | glb-draco (binary glTF, Draco-compressed)")->capture_default_str();
     add_reconstruct_options(rc, o.reconstruct);
     return rc;
 }

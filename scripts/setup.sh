@@ -11,6 +11,7 @@ PKGS=(
   libcli11-dev         # command-line parsing
   liblzf-dev           # PCD binary_compressed (LZF)
   libmeshoptimizer-dev # mesh simplification (--simplify)
+  libdraco-dev         # Draco compression of binary glTF (--mesh-format glb-draco)
   libgtest-dev         # unit tests
   libbenchmark-dev     # micro-benchmarks
   libembree-dev        # ray casting: simulator and renderer
@@ -74,10 +75,11 @@ if [ ! -d "$ros2_writers/node_modules/@mcap/core" ] || [ ! -d "$ros2_writers/nod
   echo "setup: npm ci in $ros2_writers (@mcap/core, @foxglove/cdr and @foxglove/velodyne-cloud for the recordings tests)"
   (cd "$ros2_writers" && npm ci --no-audit --no-fund --loglevel=error)
 fi
-# `setup.sh viewer`: playwright-core (the pinned version of tests/viewer/package-lock.json), which
-# drives Debian's Chromium through the live view in make viewer-check; it downloads no browser.
+# `setup.sh viewer`: playwright-core and gltf-validator (the pinned versions of
+# tests/viewer/package-lock.json): the first drives Debian's Chromium through the live view and the
+# glTF check in make viewer-check (it downloads no browser); the second is Khronos's glTF validator.
 tests_viewer="$(cd "$(dirname "$0")/.." && pwd)/tests/viewer"
-if [ "${1:-}" = "viewer" ] && [ ! -d "$tests_viewer/node_modules/playwright-core" ]; then
-  echo "setup: npm ci in $tests_viewer (playwright-core for the live view's check)"
+if [ "${1:-}" = "viewer" ] && { [ ! -d "$tests_viewer/node_modules/playwright-core" ] || [ ! -d "$tests_viewer/node_modules/gltf-validator" ]; }; then
+  echo "setup: npm ci in $tests_viewer (playwright-core and gltf-validator for the viewer's checks)"
   (cd "$tests_viewer" && npm ci --no-audit --no-fund --loglevel=error)
 fi

@@ -19,7 +19,8 @@ from . import _lidarsurf as _ls
 
 __all__ = ["fuse_tiles", "TileResult"]
 
-_TEMPORARY = re.compile(r"^tile_-?\d+_-?\d+\.ply\.tmp\.\d+\.\d+$")
+_TEMPORARY = re.compile(r"^tile_-?\d+_-?\d+\.(ply|glb)\.tmp\.\d+\.\d+$")
+_EXTENSIONS = {"ply": "ply", "glb": "glb", "glb-draco": "glb"}
 
 
 class TileResult(tuple):
@@ -29,7 +30,7 @@ class TileResult(tuple):
     def __new__(cls, paths, index):
         return super().__new__(cls, (paths, index))
 
-    paths = property(lambda self: self[0], doc="The tile meshes (.ply), in the index's order.")
+    paths = property(lambda self: self[0], doc="The tile meshes (.ply or .glb), in the index's order.")
     index = property(lambda self: self[1], doc="The index file: the plan and, per tile, its key, path and counts.")
 
 
@@ -38,8 +39,8 @@ def _reaches(sequence, frames, recording=None):
     return _ls.sequence_reaches(sequence, frames, recording)
 
 
-def _tile(sequence, frames, reaches, config, tiles, key, path, recording=None):
-    return _ls.fuse_tile(sequence, frames, reaches, config, tiles, tuple(key), path, recording)
+def _tile(sequence, frames, reaches, config, tiles, key, path, recording=None, mesh_format="auto"):
+    return _ls.fuse_tile(sequence, frames, reaches, config, tiles, tuple(key), path, recording, mesh_format)
 
 
 def _is_recording(path):
@@ -73,11 +74,12 @@ def _write_json(path, data):
 
 
 def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, halo_cubes=32, first=0, frames=0, step=1,
-               plan_chunk=100, retries=2, poses=None, times=None, topic=None, metadata=None, deskew=True):
+               plan_chunk=100, retries=2, poses=None, times=None, topic=None, metadata=None, deskew=True, mesh_format="ply"):
     """Fuse a sequence (KITTI layout, poses as `lidarsurf fuse` finds them) into a map cut in square
     tiles of `tile_size` metres, each tile a task on the dask.distributed `client` (a LocalCluster of
     this machine's cores when None), and write one mesh per tile, out_dir/tile_X_Y.ply, and
-    out_dir/index.json. Returns TileResult(paths, index).
+    out_dir/index.json. Returns TileResult(paths, index). `mesh_format` "glb" writes binary glTF
+    (tile_X_Y.glb), "glb-draco" Draco-compressed glTF; each tile's file is whole in itself.
 
     Together the tiles' meshes are the whole map's (`lidarsurf fuse` without tiles): each triangle in
     exactly one tile, the one whose square holds its cube. A tile reads the scans that reach it from
@@ -92,6 +94,8 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
     False; `first`, `frames` and `step` count those scans. Each task reads the recording from its
     start (streamed) up to the scans it needs.
     """
+    if mesh_format not in _EXTENSIONS:
+        raise ValueError(f"mesh_format must be one of {', '.join(_EXTENSIONS)} (got {mesh_format!r})")
     config = config if config is not None else _ls.Config()
     tiles = _ls.TileConfig(tile_size, halo_cubes)
     config.validate()
@@ -114,8 +118,8 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
         os.makedirs(out_dir, exist_ok=True)
         shared = client.scatter(reaches, broadcast=True)
         keys = plan.tiles
-        paths = [os.path.join(out_dir, f"tile_{x}_{y}.ply") for x, y in keys]
-        futures = [client.submit(_tile, sequence, indices, shared, config, tiles, key, path, recording, retries=retries, pure=False)
+        paths = [os.path.join(out_dir, f"tile_{x}_{y}.{_EXTENSIONS[mesh_format]}") for x, y in keys]
+        futures = [client.submit(_tile, sequence, indices, shared, config, tiles, key, path, recording, mesh_format, retries=retries, pure=False)
                    for key, path in zip(keys, paths)]
         counts = client.gather(futures)
     for name in os.listdir(out_dir):  # what a killed worker was writing
@@ -137,6 +141,7 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
         "grid_origin": plan.grid_origin,
         "ray_reach": plan.ray_reach,
         "config": repr(config),
+        "mesh_format": mesh_format,
         "triangles": sum(e["triangles"] for e in entries),
         "tiles": entries,
     })
@@ -147,7 +152,7 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="python3 -m lidarsurf.tiles",
                                 description="Fuse a sequence into a map cut in tiles, one Dask task per tile.")
     p.add_argument("sequence", help="sequence directory (KITTI layout: velodyne/NNNNNN.bin, poses.txt), or a recording")
-    p.add_argument("out_dir", help="where the tiles' meshes (tile_X_Y.ply) and index.json go")
+    p.add_argument("out_dir", help="where the tiles' meshes (tile_X_Y.ply or .glb) and index.json go")
     p.add_argument("--tile-size", type=float, default=100.0, help="side of the square tiles, metres (default 100)")
     p.add_argument("--tile-halo-cubes", type=int, default=32, help="cubes a tile's surface search reaches beyond it")
     p.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://HOST:8786 (default: a local cluster)")
@@ -159,6 +164,7 @@ def main(argv=None):
     p.add_argument("--topic", help="a bag's topic of the scans")
     p.add_argument("--metadata", help="an Ouster metadata JSON or a Velodyne calibration YAML")
     p.add_argument("--deskew", type=int, default=1, help="0: a recording's scans as recorded, not de-skewed")
+    p.add_argument("--mesh-format", default="ply", choices=sorted(_EXTENSIONS), help="the tiles' files: ply, glb (binary glTF) or glb-draco")
     a = p.parse_args(argv)
     client = None
     if a.scheduler:
@@ -167,7 +173,7 @@ def main(argv=None):
     try:
         result = fuse_tiles(a.sequence, a.out_dir, a.tile_size, client=client, halo_cubes=a.tile_halo_cubes, first=a.first,
                             frames=a.frames, step=a.step, poses=a.poses, times=a.times, topic=a.topic, metadata=a.metadata,
-                            deskew=bool(a.deskew))
+                            deskew=bool(a.deskew), mesh_format=a.mesh_format)
     except (ValueError, OSError, MemoryError) as e:
         print(f"lidarsurf.tiles: {e}", file=sys.stderr)
         return 2

@@ -72,7 +72,7 @@ void bind_mesh(py::module_& m) {
                 write_mesh(mesh, path, f);
             },
             py::arg("path"), py::arg("format") = "auto",
-            "Write the mesh atomically: .ply (binary) by default, .obj by extension; format 'ply', 'ply-ascii' or 'obj'.")
+            "Write the mesh atomically, in the format of the path's extension (.ply binary, .obj, .glb binary glTF) or `format`: 'ply', 'ply-ascii', 'obj', 'glb' or 'glb-draco' (Draco-compressed glTF).")
         .def("__repr__", [](const Mesh& mesh) {
             return "Mesh(" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.triangles.size()) + " triangles)";
         });

@@ -233,7 +233,8 @@ void bind_tiles(py::module_& m) {
         "fuse_tile",
         [](const std::string& sequence, const std::vector<std::size_t>& frames, const py::array_t<double, py::array::c_style | py::array::forcecast>& reaches,
            const ReconstructionConfig& config, const TileConfig& tiles, std::pair<int, int> tile, const std::string& output,
-           const py::object& recording) {
+           const py::object& recording, const std::string& mesh_format) {
+            const MeshFormat format = parse_mesh_format(mesh_format);
             std::vector<ScanReach> r = reaches_from(reaches);
             const auto source = RecordingSource::from(recording);
             py::dict out;
@@ -249,7 +250,7 @@ void bind_tiles(py::module_& m) {
                     plan, {tile.first, tile.second},
                     [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) { return seq.scan(n, empty_rays ? &no_return : nullptr); }, &s);
                 triangles = mesh.triangles.size(), vertices = mesh.vertices.size();
-                if (!output.empty() && triangles > 0) write_mesh(mesh, output);
+                if (!output.empty() && triangles > 0) write_mesh(mesh, output, format);
             }
             out["triangles"] = triangles;
             out["vertices"] = vertices;
@@ -259,8 +260,9 @@ void bind_tiles(py::module_& m) {
             return out;
         },
         py::arg("sequence"), py::arg("frames"), py::arg("reaches"), py::arg("config"), py::arg("tiles"), py::arg("tile"), py::arg("output"),
-        py::arg("recording") = py::none(),
+        py::arg("recording") = py::none(), py::arg("mesh_format") = "auto",
         "Fuse and mesh one tile of a sequence's map (a recording's with `recording`, as sequence_frames takes it) and write its mesh to `output` atomically (whole or not at all; "
+        "`mesh_format` as write_mesh's: auto, ply, ply-ascii, obj, glb, glb-draco; "
         "nothing for a tile without a triangle): the "
         "task fuse_tiles gives a worker. Returns a dict of counts (triangles, vertices, voxels, carved_voxels) and seconds.");
 }

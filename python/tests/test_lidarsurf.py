@@ -225,6 +225,10 @@ def test_save_read_points_and_os_errors(scan, tmp_path):
     mesh.save(str(tmp_path / "m.obj"))
     back = lidarsurf.read_mesh(str(tmp_path / "m.obj"))
     assert back.triangles.shape == mesh.triangles.shape
+    mesh.save(str(tmp_path / "m.glb"))  # binary glTF by its extension (tests/io/test_glb_writer.cpp reads it)
+    assert (tmp_path / "m.glb").read_bytes()[:4] == b"glTF"
+    with pytest.raises(ValueError, match="glb-draco"):
+        mesh.save(str(tmp_path / "m.glb"), format="gltf")
     with pytest.raises(OSError, match="cannot"):
         mesh.save(str(tmp_path / "missing_dir" / "m.ply"))
     with pytest.raises(OSError, match="cannot open"):

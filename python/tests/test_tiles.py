@@ -50,6 +50,30 @@ def test_the_tiles_are_the_whole_map(drive, client, tmp_path, triangle_rows):
     assert sorted(os.listdir(tmp_path / "tiles")) == sorted([os.path.basename(p) for p in result.paths] + ["index.json"])
 
 
+def _glb_triangles(path):
+    """Triangles of a binary glTF, read from its JSON chunk as the glTF 2.0 specification lays it out."""
+    with open(path, "rb") as f:
+        data = f.read()
+    magic, version, length = np.frombuffer(data[:12], "<u4")
+    assert (magic, version, length) == (0x46546C67, 2, len(data))
+    size, kind = np.frombuffer(data[12:20], "<u4")
+    assert kind == 0x4E4F534A
+    doc = json.loads(data[20:20 + size])
+    return sum(doc["accessors"][p["indices"]]["count"] // 3 for m in doc["meshes"] for p in m["primitives"])
+
+
+def test_tiles_in_gltf_hold_the_whole_maps_triangles(drive, client, tmp_path):
+    seq, whole = drive
+    for mesh_format in ("glb", "glb-draco"):
+        result = lidarsurf.fuse_tiles(str(seq), str(tmp_path / mesh_format), tile_size=30, client=client, mesh_format=mesh_format)
+        assert len(result.paths) >= 4 and all(p.endswith(".glb") for p in result.paths)
+        assert sum(_glb_triangles(p) for p in result.paths) == len(whole.triangles), mesh_format
+        with open(result.index) as f:
+            assert json.load(f)["mesh_format"] == mesh_format
+    with pytest.raises(ValueError, match="mesh_format"):
+        lidarsurf.fuse_tiles(str(seq), str(tmp_path / "no"), client=client, mesh_format="stl")
+
+
 def test_a_recordings_tiles_are_the_whole_map_of_its_drive(drive, cli, client, tmp_path, triangle_rows):
     # The drive written as a ROS 1 bag by ROS's own writer (python3-rosbag), fused in tiles from the
     # bag with its KITTI poses and times: the KITTI layout's whole map, triangle for triangle. The

@@ -3,10 +3,23 @@
 #include <iomanip>
 #include <vector>
 
+#include "glb_format.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "ply_writer.hpp"
 
 namespace lidarsurf {
+
+struct MeshStreamWriter::Glb {
+    detail::GlbLayout layout;
+    detail::PositionBounds bounds;
+    std::vector<detail::DracoPrimitive> draco;  // their bytes in vertex_records_
+};
+
+namespace {
+
+bool is_glb(MeshFormat f) { return f == MeshFormat::Glb || f == MeshFormat::GlbDraco; }
+
+}  // namespace
 
 MeshStreamWriter::MeshStreamWriter(const std::filesystem::path& path, MeshFormat format, bool double_coordinates)
     : dbl_(double_coordinates) {
@@ -16,6 +29,7 @@ MeshStreamWriter::MeshStreamWriter(const std::filesystem::path& path, MeshFormat
         out_->stream() << "# lidarsurf mesh\n" << std::setprecision(dbl_ ? 15 : 9);
         return;
     }
+    if (is_glb(format_)) glb_ = std::make_unique<Glb>();
     // Never committed: the directory goes with the writer, or with the process on a signal.
     const std::filesystem::path dir = out_->destination().parent_path();
     spill_ = std::make_unique<AtomicDirectory>((dir.empty() ? std::filesystem::path(".") : dir) / (out_->destination().filename().string() + ".parts"));
@@ -32,9 +46,12 @@ void MeshStreamWriter::append(const Mesh& part, std::span<const std::int64_t> ex
         throw InvalidArgument("MeshStreamWriter: one `existing` entry per vertex of the part");
     if (part.triangles.empty()) return;
     const bool n = !part.normals.empty(), k = !part.levels.empty(), c = !part.confidence.empty();
-    if (!has_layout_) has_layout_ = true, normals_ = n, levels_ = k, confidence_ = c;
-    else if (n != normals_ || k != levels_ || c != confidence_)
+    if (!has_layout_) {
+        has_layout_ = true, normals_ = n, levels_ = k, confidence_ = c;
+        if (glb_) glb_->layout = detail::GlbLayout::of(part);
+    } else if (n != normals_ || k != levels_ || c != confidence_) {
         throw InvalidArgument("MeshStreamWriter: a part with other vertex attributes than the first");
+    }
     // The part's vertex i is written as index[i].
     std::vector<std::uint64_t> index(part.vertices.size());
     std::uint64_t next = vertices_;
@@ -62,12 +79,21 @@ void MeshStreamWriter::append(const Mesh& part, std::span<const std::int64_t> ex
             }
             out << '\n';
         }
+    } else if (format_ == MeshFormat::GlbDraco) {
+        detail::DracoPrimitive p = detail::draco_primitive(part, glb_->layout);
+        vertex_records_.write(p.bytes.data(), static_cast<std::streamsize>(p.bytes.size()));
+        detail::write_glb_padding(vertex_records_, p.length);
+        p.bytes = {};
+        glb_->draco.push_back(std::move(p));
+    } else if (format_ == MeshFormat::Glb) {
+        detail::write_glb_vertices(vertex_records_, glb_->layout, part, existing, glb_->bounds);
+        detail::write_glb_indices(face_records_, part.triangles, [&](std::uint32_t i) { return index[i]; });
     } else {
         const detail::PlyLayout l{format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_};
         detail::write_ply_vertices(vertex_records_, l, part, existing);
         detail::write_ply_faces(face_records_, l, part.triangles, [&](std::uint32_t i) { return index[i]; });
-        if (!vertex_records_ || !face_records_) throw IoError(spill_->path().string() + ": cannot write the mesh's records (disk full?)");
     }
+    if (spill_ && (!vertex_records_ || !face_records_)) throw IoError(spill_->path().string() + ": cannot write the mesh's records (disk full?)");
     vertices_ = next;
     triangles_ += part.triangles.size();
 }
@@ -78,7 +104,14 @@ void MeshStreamWriter::commit() {
         face_records_.close();
         if (!vertex_records_ || !face_records_) throw IoError(spill_->path().string() + ": cannot write the mesh's records (disk full?)");
         std::ostream& out = out_->stream();
-        detail::write_ply_header(out, {format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_}, vertices_, triangles_);
+        if (glb_ && triangles_ == 0) throw InvalidInput("glTF: the mesh has no triangle (a .glb's accessors need one)");
+        if (format_ == MeshFormat::GlbDraco)
+            detail::write_glb_header(out, detail::glb_json(glb_->layout, glb_->draco), detail::glb_binary_length(glb_->draco));
+        else if (format_ == MeshFormat::Glb)
+            detail::write_glb_header(out, detail::glb_json(glb_->layout, vertices_, triangles_, glb_->bounds),
+                                     detail::glb_binary_length(glb_->layout, vertices_, triangles_));
+        else
+            detail::write_ply_header(out, {format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_}, vertices_, triangles_);
         for (const char* name : {"vertices", "faces"}) {
             std::ifstream in(spill_->path() / name, std::ios::binary);
             if (!in) throw IoError((spill_->path() / name).string() + ": cannot read the mesh's records back");

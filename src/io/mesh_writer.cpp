@@ -12,6 +12,7 @@
 #include "byte_reader.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/io/atomic_file.hpp"
+#include "lidarsurf/io/glb_writer.hpp"
 #include "ply_format.hpp"
 #include "ply_writer.hpp"
 
@@ -23,7 +24,9 @@ MeshFormat parse_mesh_format(std::string_view name) {
     if (s == "ply" || s == "ply-binary") return MeshFormat::PlyBinary;
     if (s == "ply-ascii") return MeshFormat::PlyAscii;
     if (s == "obj") return MeshFormat::Obj;
-    throw InvalidArgument("unknown mesh format '" + std::string(name) + "' (expected ply, ply-ascii or obj)");
+    if (s == "glb") return MeshFormat::Glb;
+    if (s == "glb-draco") return MeshFormat::GlbDraco;
+    throw InvalidArgument("unknown mesh format '" + std::string(name) + "' (expected ply, ply-ascii, obj, glb or glb-draco)");
 }
 
 namespace {
@@ -151,21 +154,25 @@ MeshFormat mesh_format_for(const std::filesystem::path& path, MeshFormat format)
     const std::string ext = detail::lower(path.extension().string());
     if (ext == ".ply") return MeshFormat::PlyBinary;
     if (ext == ".obj") return MeshFormat::Obj;
+    if (ext == ".glb") return MeshFormat::Glb;
     throw InvalidArgument(path.string() + ": unknown mesh extension '" + ext +
-                          "' (lidarsurf writes .ply and .obj; name the format with --mesh-format ply|ply-ascii|obj)");
+                          "' (lidarsurf writes .ply, .obj and .glb; name the format with --mesh-format ply|ply-ascii|obj|glb|glb-draco)");
 }
 
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path, MeshFormat format) {
     AtomicFile file(path);  // first: a directory or an unwritable place is the file system's error
     format = mesh_format_for(path, format);  // the stream writers check the mesh; a throw removes the temporary
     if (format == MeshFormat::Obj) write_obj(mesh, file.stream());
+    else if (format == MeshFormat::Glb || format == MeshFormat::GlbDraco) write_glb(mesh, file.stream(), format == MeshFormat::GlbDraco);
     else write_ply(mesh, file.stream(), format == MeshFormat::PlyBinary);
     file.commit();
 }
 
 Mesh read_mesh(const std::filesystem::path& path) {
     const std::string name = path.string();
-    const bool obj = detail::lower(path.extension().string()) == ".obj";
+    const std::string ext = detail::lower(path.extension().string());
+    if (ext == ".glb") throw InvalidArgument(name + ": lidarsurf writes glTF but reads meshes as PLY or OBJ");
+    const bool obj = ext == ".obj";
     return parse_mesh(detail::read_file(name), obj ? MeshFormat::Obj : MeshFormat::PlyBinary, name);
 }
 
