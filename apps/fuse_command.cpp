@@ -340,7 +340,8 @@ public:
         if (server_) {
             const LiveServer::Stats st = server_->stats();  // at the end of the drive, before the final map is sent
             j["serve"] = {{"port", server_->port()},       {"clients_now", st.clients}, {"clients_accepted", st.accepted},
-                          {"clients_dropped", st.dropped}, {"messages", st.messages},  {"bytes", st.bytes}};
+                          {"clients_dropped", st.dropped}, {"messages", st.messages},  {"bytes", st.bytes},
+                          {"wire_bytes", st.wire_bytes}};
         }
         write_json(o_.json, j);
     }

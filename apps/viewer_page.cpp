@@ -1,4 +1,4 @@
-// The viewer's page: viewer/viewer.html with the data block, three.js and the viewer's script.
+// The viewer's page: viewer/viewer.html with the data block, three.js, the live stream's decoder and the viewer's script.
 #include "viewer_page.hpp"
 
 #include <string_view>
@@ -66,7 +66,8 @@ std::string viewer_page(const nlohmann::json& data) {
     for (std::size_t p = 0; (p = json.find("</", p)) != std::string::npos; p += 3) json.replace(p, 2, "<\\/");  // stays inside its <script>
     const std::string title = data.contains("title") ? data["title"].get<std::string>() : std::string("lidarsurf");
     const std::string escaped_title = html_escaped(title), three = joined(viewer_assets::three), script = joined(viewer_assets::script);
-    return fill(joined(viewer_assets::page), {{"@TITLE@", escaped_title}, {"@DATA@", json}, {"@THREE@", three}, {"@VIEWER@", script}});
+    const std::string meshopt = joined(viewer_assets::meshopt);
+    return fill(joined(viewer_assets::page), {{"@TITLE@", escaped_title}, {"@DATA@", json}, {"@THREE@", three}, {"@MESHOPT@", meshopt}, {"@VIEWER@", script}});
 }
 
 }  // namespace lidarsurf::cli

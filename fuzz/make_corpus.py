@@ -87,17 +87,23 @@ put("fuzz_reconstruct", "plane", recon(0, plane))
 put("fuzz_reconstruct", "corner_imls", recon(2, corner))
 put("fuzz_reconstruct", "corner_far", recon(4, corner))
 # The live view's stream (viz/live_stream.hpp): a header, a trajectory point, a removed block and a
-# block of one triangle; and a header alone.
-def live(flags, blocks):
-    header = b"LSLV" + struct.pack("<III", 1, flags, 3) + struct.pack("<3d", 1000.0, 2000.0, 10.0)
-    header += struct.pack("<12f", 1, 0, 0, 3, 0, 1, 0, 4, 0, 0, 1, 0.5) + struct.pack("<III", 1, 1, len(blocks))
-    header += b"\0" * (112 - len(header))
-    return header + struct.pack("<3f", 3, 4, 0.5) + struct.pack("<3i", -1, 2, -3) + b"".join(blocks)
-tri = (struct.pack("<3i", 5, 6, -7) + struct.pack("<II", 3, 1) + struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
-       + struct.pack("<3f", 0.5, 0.25, 1.0) + bytes([1, 2, 3, 0]) + struct.pack("<3I", 0, 1, 2))
-put("fuzz_live_stream", "one_block", live(1, [tri]))
-put("fuzz_live_stream", "two_blocks_final", live(2, [tri, tri]))
-put("fuzz_live_stream", "header_only", live(4, []))
+# block of one triangle; and a header alone. Its blocks are in meshoptimizer's codecs: the messages
+# come from lidarsurf's own encoder (PYTHONPATH=build/python), kept as they are without it.
+try:
+    import lidarsurf
+except ImportError:
+    lidarsurf = None
+    print("make_corpus: lidarsurf is not importable (PYTHONPATH=build/python): fuzz_live_stream's seeds left as they are")
+if lidarsurf is not None:
+    def live(flags, blocks):
+        pose = [[1, 0, 0, 1003], [0, 1, 0, 2004], [0, 0, 1, 10.5], [0, 0, 0, 1]]
+        return lidarsurf.encode_live_message(3, (1000.0, 2000.0, 10.0), pose, [[1003, 2004, 10.5]], [(-1, 2, -3)],
+                                             [((5, 6, -7), tri) for tri in blocks],
+                                             reset=bool(flags & 1), final=bool(flags & 2), more=bool(flags & 4))
+    tri = lidarsurf.Mesh([[1000, 2000, 10], [1001, 2000, 10], [1000, 2001, 10.5]], [[0, 1, 2]])
+    put("fuzz_live_stream", "one_block", live(1, [tri]))
+    put("fuzz_live_stream", "two_blocks_final", live(2, [tri, tri]))
+    put("fuzz_live_stream", "header_only", live(4, []))
 # Ouster pcaps (fuzz_ouster_pcap.cpp: 8 beams, 64 columns a frame, 16 a packet; the first byte
 # picks the profile). One frame's packets over Ethernet/IPv4/UDP to port 7502, the larger ones
 # in 1480-byte IPv4 fragments.

@@ -1,7 +1,7 @@
 """The live view's end state against fuse's output (scripts/live_view_check.sh): the screenshots
 show a mesh that grew, and the mesh the page holds at the end (page_mesh.json, decoded by the
 page from the stream) is the mesh fuse wrote (map.obj): every triangle of one is in the other,
-within float32 of the stream (1e-4 m)."""
+within the stream's quantization (a quarter of a millimetre)."""
 import json
 import os
 import sys
@@ -9,7 +9,7 @@ import sys
 sys.path.insert(0, os.path.dirname(__file__))
 from png_rows import covered_share, pixels  # noqa: E402
 
-TOLERANCE = 1e-4  # metres: float32 positions relative to the stream's origin, a drive of 100 m
+TOLERANCE = 0.3e-3  # metres: the stream's 0.5 mm position steps (live_stream.hpp), and float32
 
 
 def read_obj(path):

@@ -24,7 +24,7 @@ print(f"{sys.argv[1]:<22} update median {u[0]:6.1f} p90 {u[1]:6.1f} ms; serve me
 if "serve" in j:
     v = j["serve"]
     print(f"  server at the end of the drive: {v['clients_accepted']} clients accepted, {v['clients_dropped']} dropped, "
-          f"{v['clients_now']} connected, {v['messages']} messages, {v['bytes'] / 1e9:.2f} GB")
+          f"{v['clients_now']} connected, {v['messages']} messages, {v['bytes'] / 1e9:.2f} GB, {v.get('wire_bytes', 0) / 1e9:.2f} GB on the wire")
 PY
 }
 for round in $(seq "$rounds"); do

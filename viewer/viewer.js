@@ -311,7 +311,7 @@
   function receive(buffer) {
     const dv = new DataView(buffer);
     const magic = String.fromCharCode(dv.getUint8(0), dv.getUint8(1), dv.getUint8(2), dv.getUint8(3));
-    if (magic !== "LSLV" || dv.getUint32(4, true) !== 1) throw new Error("not a lidarsurf live stream (version 1)");
+    if (magic !== "LSLV" || dv.getUint32(4, true) !== 2) throw new Error("not a lidarsurf live stream (version 2)");
     const flags = dv.getUint32(8, true);
     scans = dv.getUint32(12, true);
     origin = [dv.getFloat64(16, true), dv.getFloat64(24, true), dv.getFloat64(32, true)];
@@ -327,18 +327,29 @@
     const removed = new Int32Array(buffer, at, 3 * nRemoved);
     at += 12 * nRemoved;
     for (let i = 0; i < nRemoved; i++) removePiece(removed[3 * i] + "," + removed[3 * i + 1] + "," + removed[3 * i + 2]);
+    // A block: its vertex records and triangles in meshoptimizer's codecs; positions in 16-bit
+    // steps from the block's lowest corner, confidence in 16-bit steps from 0.
     for (let b = 0; b < nChanged; b++) {
       const k = new Int32Array(buffer, at, 3);
       const nv = dv.getUint32(at + 12, true), nt = dv.getUint32(at + 16, true);
-      at += 20;
-      const positions = new Float32Array(buffer, at, 3 * nv);
-      at += 12 * nv;
-      const confidence = new Float32Array(buffer, at, nv);
-      at += 4 * nv;
-      const levels = new Uint8Array(buffer, at, nv);
-      at += (nv + 3) & ~3;
-      const indices = new Uint32Array(buffer, at, 3 * nt);
-      at += 12 * nt;
+      const base = [dv.getFloat32(at + 20, true), dv.getFloat32(at + 24, true), dv.getFloat32(at + 28, true)];
+      const step = dv.getFloat32(at + 32, true), cstep = dv.getFloat32(at + 36, true);
+      const vertexBytes = dv.getUint32(at + 40, true), indexBytes = dv.getUint32(at + 44, true);
+      at += 48;
+      const records = new Uint8Array(12 * nv);
+      MeshoptDecoder.decodeVertexBuffer(records, nv, 12, new Uint8Array(buffer, at, vertexBytes));
+      at += (vertexBytes + 3) & ~3;
+      const indices = new Uint32Array(3 * nt);
+      MeshoptDecoder.decodeIndexBuffer(new Uint8Array(indices.buffer), 3 * nt, 4, new Uint8Array(buffer, at, indexBytes));
+      at += (indexBytes + 3) & ~3;
+      const q = new Uint16Array(records.buffer);
+      const positions = new Float32Array(3 * nv), confidence = new Float32Array(nv), levels = new Uint8Array(nv);
+      for (let i = 0; i < nv; i++) {
+        for (let a = 0; a < 3; a++) positions[3 * i + a] = base[a] + q[6 * i + a] * step;
+        confidence[i] = q[6 * i + 3] * cstep;
+        levels[i] = records[12 * i + 8];
+      }
+      for (let i = 0; i < indices.length; i++) if (indices[i] >= nv) throw new Error("a triangle index out of its block");
       addPiece(k[0] + "," + k[1] + "," + k[2], positions, indices, levels, confidence);
     }
     // The sensor: position and heading (the pose's x axis); the camera follows it when asked.
@@ -371,5 +382,5 @@
   describe(state);
   apply();
   document.body.dataset.ready = "1";
-  connect();
+  MeshoptDecoder.ready.then(connect);  // the stream's decoder (WebAssembly) first
 })();

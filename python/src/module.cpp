@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -268,6 +269,40 @@ PYBIND11_MODULE(_lidarsurf, m) {
         "the next message); 'origin'; 'pose' (4x4, the sensor's, world); 'trajectory' ((N, 3) sensor positions not sent "
         "before); 'removed' [key]; 'changed' [(key, Mesh)], as MeshDelta has them. Raises ValueError for bytes that are "
         "not such a message.");
+
+    m.def(
+        "encode_live_message",
+        [](std::uint32_t scans, const std::array<double, 3>& origin, const py::array_t<double, py::array::c_style | py::array::forcecast>& pose,
+           const py::array_t<double, py::array::c_style | py::array::forcecast>& trajectory, const std::vector<std::array<int, 3>>& removed,
+           const std::vector<std::pair<std::array<int, 3>, Mesh>>& changed, bool reset, bool final, bool more) {
+            if (pose.ndim() != 2 || pose.shape(0) != 4 || pose.shape(1) != 4) throw InvalidArgument("encode_live_message: pose must be 4x4");
+            if (trajectory.size() > 0 && (trajectory.ndim() != 2 || trajectory.shape(1) != 3))
+                throw InvalidArgument("encode_live_message: trajectory must be (N, 3)");
+            live_stream::Header h;
+            h.scans = scans;
+            h.flags = (reset ? live_stream::kReset : 0u) | (final ? live_stream::kFinal : 0u) | (more ? live_stream::kMore : 0u);
+            h.origin = {origin[0], origin[1], origin[2]};
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 4; ++c) h.pose.matrix()(r, c) = pose.at(r, c);
+            std::vector<Eigen::Vector3d> points;
+            for (py::ssize_t i = 0; trajectory.size() > 0 && i < trajectory.shape(0); ++i) points.emplace_back(trajectory.at(i, 0), trajectory.at(i, 1), trajectory.at(i, 2));
+            std::vector<VoxelKey> keys;
+            for (const auto& k : removed) keys.emplace_back(k[0], k[1], k[2]);
+            std::vector<std::string> bodies;
+            for (const auto& [k, mesh] : changed) {
+                mesh.check();
+                bodies.push_back(live_stream::encode_block(MeshBlock{VoxelKey(k[0], k[1], k[2]), mesh}, h.origin));
+            }
+            std::vector<const std::string*> blocks;
+            for (const std::string& b : bodies) blocks.push_back(&b);
+            return py::bytes(live_stream::encode_message(h, points, keys, blocks));
+        },
+        py::arg("scans"), py::arg("origin"), py::arg("pose"), py::arg("trajectory"), py::arg("removed"), py::arg("changed"), py::kw_only(),
+        py::arg("reset") = false, py::arg("final") = false, py::arg("more") = false,
+        "Encode one message of the live view's stream, as `lidarsurf fuse --serve` sends it (docs/live_view.md): what "
+        "decode_live_message reads back, for a producer of your own. `origin` (3 floats: the world point positions are "
+        "relative to), `pose` (4x4, the sensor's, world), `trajectory` ((N, 3) sensor positions), `removed` [key], "
+        "`changed` [(key, Mesh)]. Returns bytes. Raises ValueError for a malformed mesh or a block past 65,535 vertices.");
 
     m.def(
         "_evaluate_json",

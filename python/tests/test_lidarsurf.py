@@ -455,32 +455,41 @@ def test_fuse_live_yields_what_the_live_view_streams(scan, tmp_path):
         lidarsurf.read_recording(str(tmp_path / "tf.bag"), poses="recording", fixed_frame="nowhere")
 
 
-def test_decode_live_message_reads_the_documented_layout():
+def test_live_messages_have_the_documented_layout_and_read_back():
     import struct
     origin = (1000.0, 2000.0, 10.0)
-    pose = [1, 0, 0, 3.0, 0, 1, 0, 4.0, 0, 0, 1, 0.5]  # 3x4, translation relative to the origin
-    header = b"LSLV" + struct.pack("<III", 1, 1 | 2, 7) + struct.pack("<3d", *origin) + struct.pack("<12f", *pose)
-    header += struct.pack("<III", 1, 1, 1)
-    header += b"\0" * (112 - len(header))
-    trajectory = struct.pack("<3f", 3.0, 4.0, 0.5)
-    removed = struct.pack("<3i", -1, 2, -3)
-    block = struct.pack("<3i", 5, 6, -7) + struct.pack("<II", 3, 1)
-    block += struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<3f", 0.5, 0.25, 1.0) + bytes([1, 2, 3, 0])
-    block += struct.pack("<3I", 0, 1, 2)
-    m = lidarsurf.decode_live_message(header + trajectory + removed + block)
+    pose = np.array([[1, 0, 0, 1003.0], [0, 1, 0, 2004.0], [0, 0, 1, 10.5], [0, 0, 0, 1]])
+    tri = lidarsurf.Mesh([[1000, 2000, 10], [1001, 2000, 10], [1000, 2001, 10.5]], [[0, 1, 2]])
+    data = lidarsurf.encode_live_message(7, origin, pose, [[1003.0, 2004.0, 10.5]], [(-1, 2, -3)], [((5, 6, -7), tri)],
+                                         reset=True, final=True)
+    # The header and the block's fields as docs/live_view.md lays them out.
+    assert data[:4] == b"LSLV" and struct.unpack_from("<III", data, 4) == (2, 1 | 2, 7)
+    assert struct.unpack_from("<3d", data, 16) == origin
+    assert struct.unpack_from("<12f", data, 40)[3::4] == (3.0, 4.0, 0.5)  # translation relative to the origin
+    assert struct.unpack_from("<III", data, 88) == (1, 1, 1)
+    assert struct.unpack_from("<3f", data, 112) == (3.0, 4.0, 0.5)
+    assert struct.unpack_from("<3i", data, 124) == (-1, 2, -3)
+    key, counts, corner = struct.unpack_from("<3i", data, 136), struct.unpack_from("<II", data, 148), struct.unpack_from("<3f", data, 156)
+    assert key == (5, 6, -7) and counts == (3, 1) and corner == (0.0, 0.0, 0.0)
+    step, cstep = struct.unpack_from("<2f", data, 168)
+    assert step == pytest.approx(0.5e-3) and cstep == 0  # the finest step (1 m needs no more); no confidence
+    vertex_bytes, index_bytes = struct.unpack_from("<II", data, 176)
+    assert len(data) == 184 + (vertex_bytes + 3) // 4 * 4 + (index_bytes + 3) // 4 * 4
+
+    m = lidarsurf.decode_live_message(data)
     assert (m["scans"], m["reset"], m["final"], m["more"]) == (7, True, True, False)
     assert m["origin"] == origin
-    np.testing.assert_allclose(m["pose"][:3, 3], [1003.0, 2004.0, 10.5])
+    np.testing.assert_allclose(m["pose"], pose, atol=1e-5)
     np.testing.assert_allclose(m["trajectory"], [[1003.0, 2004.0, 10.5]])
     assert m["removed"] == [(-1, 2, -3)]
     (key, mesh), = m["changed"]
     assert key == (5, 6, -7)
-    np.testing.assert_allclose(mesh.vertices, [[1000, 2000, 10], [1001, 2000, 10], [1000, 2001, 10]])
-    np.testing.assert_array_equal(mesh.triangles, [[0, 1, 2]])
-    np.testing.assert_array_equal(mesh.levels, [1, 2, 3])
-    np.testing.assert_allclose(mesh.confidence, [0.5, 0.25, 1.0])
+    # The stream's order: the triangle's corners in cyclic order are the mesh's, within a step.
+    corners = mesh.vertices[mesh.triangles[0]]
+    first = int(np.argmin(np.linalg.norm(corners - tri.vertices[0], axis=1)))
+    np.testing.assert_allclose(np.roll(corners, -first, axis=0), tri.vertices, atol=0.26e-3)
     with pytest.raises(ValueError, match="live stream"):
-        lidarsurf.decode_live_message(header + trajectory)  # truncated
+        lidarsurf.decode_live_message(data[:150])  # truncated
 
 
 def test_read_poses_and_the_calibration(tmp_path):

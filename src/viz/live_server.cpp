@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <set>
 #include <thread>
@@ -35,6 +36,21 @@ constexpr std::uint32_t kHeaderLimit = 8192;
 // A client may send control frames (pong, close); a data message ends it.
 constexpr std::size_t kReadMessageMax = 1024;
 
+// The stream's socket counts what it writes: the bytes on the wire, after permessage-deflate.
+class CountingRatePolicy {
+public:
+    std::size_t written = 0;
+
+private:
+    friend class boost::beast::rate_policy_access;
+    std::size_t available_read_bytes() const noexcept { return (std::numeric_limits<std::size_t>::max)(); }
+    std::size_t available_write_bytes() const noexcept { return (std::numeric_limits<std::size_t>::max)(); }
+    void transfer_read_bytes(std::size_t) const noexcept {}
+    void transfer_write_bytes(std::size_t n) noexcept { written += n; }
+    void on_timer() const noexcept {}
+};
+using CountedStream = beast::basic_stream<tcp, net::any_io_executor, CountingRatePolicy>;
+
 class WsSession;
 
 }  // namespace
@@ -43,6 +59,8 @@ void LiveServerConfig::validate() const {
     if (port < 0 || port > 65535) throw InvalidArgument("LiveServerConfig.port must be in [0, 65535] (got " + std::to_string(port) + ")");
     if (max_clients < 1) throw InvalidArgument("LiveServerConfig.max_clients must be >= 1");
     if (max_message_bytes < 4096) throw InvalidArgument("LiveServerConfig.max_message_bytes must be >= 4096");
+    if (send_buffer_bytes < 4096 || send_buffer_bytes > (std::size_t{1} << 30))
+        throw InvalidArgument("LiveServerConfig.send_buffer_bytes must be in [4096, 2^30]");
     if (!std::isfinite(write_timeout) || write_timeout <= 0 || !std::isfinite(request_timeout) || request_timeout <= 0)
         throw InvalidArgument("LiveServerConfig.write_timeout and request_timeout must be > 0 seconds");
 }
@@ -58,7 +76,7 @@ struct LiveServerState {
     LiveFeed feed;
     std::set<std::shared_ptr<WsSession>> sessions;  // the io thread's
     std::atomic<bool> kick_pending{false};
-    std::atomic<std::size_t> accepted{0}, dropped{0}, messages{0}, bytes{0};
+    std::atomic<std::size_t> accepted{0}, dropped{0}, messages{0}, bytes{0}, wire_bytes{0};
     int port = 0;  // the one listened on (set before the thread starts)
     std::thread thread;
 
@@ -85,6 +103,13 @@ public:
         ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& r) { r.set(http::field::server, "lidarsurf"); }));
         ws_.read_message_max(kReadMessageMax);
         ws_.binary(true);
+        // permessage-deflate when the client offers it (browsers do): each message compressed with
+        // the ones before as context, at zlib's fastest level (the blocks' codes leave it a third).
+        websocket::permessage_deflate deflate;
+        deflate.server_enable = true;
+        deflate.compLevel = 1;
+        deflate.memLevel = 8;  // zlib's default: ~300 KiB a client
+        ws_.set_option(deflate);
         ws_.async_accept(request_, [self = shared_from_this()](beast::error_code ec) { self->on_accept(ec); });
     }
 
@@ -105,6 +130,9 @@ public:
             if (ec) return self->drop(true);
             ++self->server_.messages;
             self->server_.bytes += n;
+            CountingRatePolicy& wire = self->ws_.next_layer().rate_policy();
+            self->server_.wire_bytes += wire.written;
+            wire.written = 0;
             self->out_ = std::string();
             self->pump();
         });
@@ -146,7 +174,7 @@ private:
     }
 
     detail::LiveServerState& server_;
-    websocket::stream<beast::tcp_stream> ws_;
+    websocket::stream<CountedStream> ws_;
     http::request<http::empty_body> request_;
     beast::flat_buffer in_;
     std::string out_;
@@ -218,7 +246,12 @@ private:
 void detail::LiveServerState::accept() {
     acceptor.async_accept([this](beast::error_code ec, tcp::socket socket) {
         if (ec == net::error::operation_aborted || !acceptor.is_open()) return;
-        if (!ec) std::make_shared<HttpSession>(*this, std::move(socket))->run();
+        if (!ec) {
+            // The kernel's share of a client's memory: its send buffer, bounded.
+            beast::error_code ignored;
+            socket.set_option(net::socket_base::send_buffer_size(static_cast<int>(config.send_buffer_bytes)), ignored);
+            std::make_shared<HttpSession>(*this, std::move(socket))->run();
+        }
         accept();
     });
 }
@@ -282,7 +315,7 @@ void LiveServer::finish(std::vector<MeshBlock> blocks, const Eigen::Isometry3d& 
 }
 
 LiveServer::Stats LiveServer::stats() const {
-    return {impl_->feed.clients(), impl_->accepted.load(), impl_->dropped.load(), impl_->messages.load(), impl_->bytes.load()};
+    return {impl_->feed.clients(), impl_->accepted.load(), impl_->dropped.load(), impl_->messages.load(), impl_->bytes.load(), impl_->wire_bytes.load()};
 }
 
 }  // namespace lidarsurf

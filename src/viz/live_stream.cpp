@@ -1,8 +1,11 @@
 #include "lidarsurf/viz/live_stream.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <type_traits>
+
+#include <meshoptimizer.h>
 
 #include "lidarsurf/core/errors.hpp"
 
@@ -10,6 +13,11 @@ namespace lidarsurf::live_stream {
 namespace {
 
 constexpr char kMagic[4] = {'L', 'S', 'L', 'V'};
+constexpr std::size_t kBlockHeaderBytes = 48;
+constexpr std::size_t kVertexRecordBytes = 12;  // x, y, z, confidence (uint16 each), level (uint8), 3 zero bytes
+constexpr std::size_t kMaxBlockVertices = 65535, kMaxBlockTriangles = 131072;
+// The finest position step: vertices within a quarter of a millimetre of the mesh's.
+constexpr double kPositionStep = 0.5e-3;
 
 std::size_t padded4(std::size_t n) { return (n + 3) & ~std::size_t{3}; }
 
@@ -52,6 +60,12 @@ public:
     void need_items(std::uint64_t count, std::size_t size) const {
         if (count > (bytes_.size() - at_) / size) fail("counts larger than the message");
     }
+    // The next n bytes, in place.
+    std::span<const std::uint8_t> take(std::size_t n) {
+        need(n);
+        at_ += n;
+        return bytes_.subspan(at_ - n, n);
+    }
     bool done() const { return at_ == bytes_.size(); }
     [[noreturn]] static void fail(const std::string& why) { throw FormatError("live stream message: " + why); }
 
@@ -68,19 +82,59 @@ private:
 std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin) {
     const Mesh& m = block.mesh;
     const std::size_t nv = m.vertices.size(), nt = m.triangles.size();
-    std::string out;
-    out.reserve(20 + 16 * nv + padded4(nv) + 12 * nt);
-    put_key(out, block.key);
-    put<std::uint32_t>(out, static_cast<std::uint32_t>(nv));
-    put<std::uint32_t>(out, static_cast<std::uint32_t>(nt));
-    for (const Eigen::Vector3d& p : m.vertices)
-        for (int a = 0; a < 3; ++a) put<float>(out, static_cast<float>(p[a] - origin[a]));
+    if (nv > kMaxBlockVertices || nt > kMaxBlockTriangles) throw InvalidArgument("live stream: a block of more than 65,535 vertices or 131,072 triangles");
+    // The codecs' best order (meshoptimizer): triangles in vertex-cache order, vertices in the
+    // order the triangles first use them (a vertex no triangle uses is left out).
+    std::vector<unsigned int> indices(3 * nt), order_of(nv);
+    for (std::size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) indices[3 * t + k] = m.triangles[t][k];
+    meshopt_optimizeVertexCache(indices.data(), indices.data(), indices.size(), nv);
+    const std::size_t kept = meshopt_optimizeVertexFetchRemap(order_of.data(), indices.data(), indices.size(), nv);
+    for (unsigned int& i : indices) i = order_of[i];
+    std::vector<std::uint32_t> vertex(kept);  // the block's vertex at each new place
+    for (std::size_t v = 0; v < nv; ++v)
+        if (order_of[v] != ~0u) vertex[order_of[v]] = static_cast<std::uint32_t>(v);
+
+    // Positions: 16 bits an axis over the block's extent, from its lowest corner (relative to the
+    // origin); confidence: 16 bits over [0, the block's largest].
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+    float cmax = 0;
     const bool confidence = m.confidence.size() == nv, levels = m.levels.size() == nv;
-    for (std::size_t i = 0; i < nv; ++i) put<float>(out, confidence ? m.confidence[i] : 0.0f);
-    for (std::size_t i = 0; i < nv; ++i) put<std::uint8_t>(out, levels ? m.levels[i] : std::uint8_t{0});
-    out.append(padded4(nv) - nv, '\0');
-    for (const auto& t : m.triangles)
-        for (const std::uint32_t v : t) put<std::uint32_t>(out, v);
+    for (const std::uint32_t v : vertex) {
+        lo = lo.cwiseMin(m.vertices[v] - origin), hi = hi.cwiseMax(m.vertices[v] - origin);
+        if (confidence && std::isfinite(m.confidence[v])) cmax = std::max(cmax, m.confidence[v]);
+    }
+    const Eigen::Vector3f base = kept ? Eigen::Vector3f(lo.cast<float>()) : Eigen::Vector3f::Zero();
+    const float step = kept ? std::max(static_cast<float>((hi - lo).maxCoeff() / 65535.0), static_cast<float>(kPositionStep)) : 1.0f;
+    const float cstep = cmax / 65535.0f;
+    const auto quantized = [](double x) { return static_cast<std::uint16_t>(std::clamp(std::lround(x), 0L, 65535L)); };
+    std::vector<unsigned char> records(kVertexRecordBytes * kept, 0);
+    for (std::size_t i = 0; i < kept; ++i) {
+        const std::uint32_t v = vertex[i];
+        unsigned char* r = records.data() + kVertexRecordBytes * i;
+        std::uint16_t q[4];
+        for (int a = 0; a < 3; ++a) q[a] = quantized((m.vertices[v][a] - origin[a] - static_cast<double>(base[a])) / step);
+        q[3] = confidence && cstep > 0 && std::isfinite(m.confidence[v]) ? quantized(std::max(0.0f, m.confidence[v]) / cstep) : 0;
+        std::memcpy(r, q, sizeof q);
+        r[8] = levels ? m.levels[v] : 0;
+    }
+    std::vector<unsigned char> vertex_code(meshopt_encodeVertexBufferBound(kept, kVertexRecordBytes));
+    vertex_code.resize(meshopt_encodeVertexBuffer(vertex_code.data(), vertex_code.size(), records.data(), kept, kVertexRecordBytes));
+    std::vector<unsigned char> index_code(meshopt_encodeIndexBufferBound(indices.size(), kept));
+    index_code.resize(meshopt_encodeIndexBuffer(index_code.data(), index_code.size(), indices.data(), indices.size()));
+
+    std::string out;
+    out.reserve(kBlockHeaderBytes + padded4(vertex_code.size()) + padded4(index_code.size()));
+    put_key(out, block.key);
+    put<std::uint32_t>(out, static_cast<std::uint32_t>(kept));
+    put<std::uint32_t>(out, static_cast<std::uint32_t>(nt));
+    for (int a = 0; a < 3; ++a) put<float>(out, base[a]);
+    put<float>(out, step);
+    put<float>(out, cstep);
+    put<std::uint32_t>(out, static_cast<std::uint32_t>(vertex_code.size()));
+    put<std::uint32_t>(out, static_cast<std::uint32_t>(index_code.size()));
+    out.append(reinterpret_cast<const char*>(vertex_code.data()), vertex_code.size()).append(padded4(vertex_code.size()) - vertex_code.size(), '\0');
+    out.append(reinterpret_cast<const char*>(index_code.data()), index_code.size()).append(padded4(index_code.size()) - index_code.size(), '\0');
     return out;
 }
 
@@ -141,27 +195,42 @@ Message decode(std::span<const std::uint8_t> bytes) {
     }
     in.need_items(n_removed, 12);
     for (std::uint32_t i = 0; i < n_removed; ++i) m.removed.push_back(in.key());
-    in.need_items(n_changed, 20);
+    in.need_items(n_changed, kBlockHeaderBytes);
     for (std::uint32_t b = 0; b < n_changed; ++b) {
         MeshBlock block;
         block.key = in.key();
         const auto nv = in.get<std::uint32_t>(), nt = in.get<std::uint32_t>();
-        in.need_items(nv, 17);
+        if (nv > kMaxBlockVertices || nt > kMaxBlockTriangles) Reader::fail("a block larger than a block can be");
+        Eigen::Vector3f base;
+        for (int a = 0; a < 3; ++a) base[a] = in.get<float>();
+        const float step = in.get<float>(), cstep = in.get<float>();
+        if (!base.allFinite() || !std::isfinite(step) || !std::isfinite(cstep)) Reader::fail("a block's corner or steps are not finite");
+        const auto vertex_bytes = in.get<std::uint32_t>(), index_bytes = in.get<std::uint32_t>();
+        const std::span<const std::uint8_t> vertex_code = in.take(vertex_bytes);
+        in.skip(padded4(vertex_bytes) - vertex_bytes);
+        const std::span<const std::uint8_t> index_code = in.take(index_bytes);
+        in.skip(padded4(index_bytes) - index_bytes);
+        std::vector<unsigned char> records(kVertexRecordBytes * nv);
+        if (meshopt_decodeVertexBuffer(records.data(), nv, kVertexRecordBytes, vertex_code.data(), vertex_code.size()) != 0)
+            Reader::fail("a block's vertices do not decode");
+        std::vector<std::uint32_t> indices(3 * std::size_t{nt});
+        if (meshopt_decodeIndexBuffer(indices.data(), indices.size(), sizeof(std::uint32_t), index_code.data(), index_code.size()) != 0)
+            Reader::fail("a block's triangles do not decode");
         Mesh& mesh = block.mesh;
-        mesh.vertices.resize(nv);
-        for (Eigen::Vector3d& p : mesh.vertices)
-            for (int a = 0; a < 3; ++a) p[a] = in.get<float>() + m.header.origin[a];
-        mesh.confidence.resize(nv);
-        for (float& c : mesh.confidence) c = in.get<float>();
-        mesh.levels.resize(nv);
-        for (std::uint8_t& l : mesh.levels) l = in.get<std::uint8_t>();
-        in.skip(padded4(nv) - nv);
-        in.need_items(nt, 12);
+        mesh.vertices.resize(nv), mesh.confidence.resize(nv), mesh.levels.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) {
+            std::uint16_t q[4];
+            std::memcpy(q, records.data() + kVertexRecordBytes * i, sizeof q);
+            for (int a = 0; a < 3; ++a) mesh.vertices[i][a] = m.header.origin[a] + static_cast<double>(base[a]) + static_cast<double>(q[a]) * step;
+            mesh.confidence[i] = static_cast<float>(q[3] * static_cast<double>(cstep));
+            mesh.levels[i] = records[kVertexRecordBytes * i + 8];
+        }
         mesh.triangles.resize(nt);
-        for (auto& tri : mesh.triangles)
-            for (std::uint32_t& v : tri) {
-                v = in.get<std::uint32_t>();
+        for (std::size_t i = 0; i < nt; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t v = indices[3 * i + k];
                 if (v >= nv) Reader::fail("a triangle index out of its block");
+                mesh.triangles[i][k] = v;
             }
         m.changed.push_back(std::move(block));
     }

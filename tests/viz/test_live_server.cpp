@@ -175,6 +175,7 @@ TEST(LiveServer, AStalledClientIsDroppedAndTheOthersGoOn) {
     LiveServerConfig c = any_port();
     c.write_timeout = 2;
     c.max_message_bytes = 256 * 1024;
+    c.send_buffer_bytes = 16 * 1024;  // the drive's compressed blocks would fit the default's buffers
     LiveServer server(c, kPage);
     WsClient stalled(server.port(), 4096);  // never reads; a small receive buffer fills at once
     WsClient reader(server.port());

@@ -1,15 +1,19 @@
 // The live stream's format (viz/live_stream.hpp) against its documented layout, computed here by
-// hand, and a round trip of the town drive's real blocks far from the world origin (float32
-// positions relative to the stream's origin keep 0.1 mm); malformed messages are refused.
+// hand and read with meshoptimizer's own decoders, and a round trip of the town drive's real
+// blocks far from the world origin (positions relative to the stream's origin, quantized within
+// their block, keep 0.25 mm); malformed messages are refused.
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <vector>
 
+#include <meshoptimizer.h>
+
 #include "../map/town_drive.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/viz/live_stream.hpp"
 #include "lidarsurf/pipeline.hpp"
+#include "live_client.hpp"
 
 using namespace lidarsurf;
 namespace ls = lidarsurf::live_stream;
@@ -41,18 +45,38 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     const Eigen::Vector3d origin(1000, 2000, 10);
     const MeshBlock block = one_triangle();
     const std::string body = ls::encode_block(block, origin);
-    // key 12 + counts 8 + positions 3*12 + confidence 3*4 + levels 3 padded to 4 + triangle 12
-    ASSERT_EQ(body.size(), 12u + 8 + 36 + 12 + 4 + 12);
+    // key 12, counts 8, lowest corner 12, steps 8, code lengths 8; the codes, each padded to 4
+    ASSERT_GE(body.size(), 48u);
     EXPECT_EQ(read_at<std::int32_t>(body, 0), -3);
     EXPECT_EQ(read_at<std::int32_t>(body, 8), -1);
     EXPECT_EQ(read_at<std::uint32_t>(body, 12), 3u);
     EXPECT_EQ(read_at<std::uint32_t>(body, 16), 1u);
-    EXPECT_EQ(read_at<float>(body, 20), 0.5f);    // x of vertex 0, relative to the origin
-    EXPECT_EQ(read_at<float>(body, 20 + 32), 0.5f);  // z of vertex 2
-    EXPECT_EQ(read_at<float>(body, 56 + 4), 0.25f);  // confidence of vertex 1
-    EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(body[68 + 2])), 3);  // level of vertex 2
-    EXPECT_EQ(body[68 + 3], '\0');                    // padding
-    EXPECT_EQ(read_at<std::uint32_t>(body, 72 + 8), 2u);
+    EXPECT_EQ(read_at<float>(body, 20), 0.5f);   // the lowest corner, relative to the origin
+    EXPECT_EQ(read_at<float>(body, 24), 0.25f);
+    EXPECT_EQ(read_at<float>(body, 28), 0.0f);
+    const float step = read_at<float>(body, 32), cstep = read_at<float>(body, 36);
+    EXPECT_FLOAT_EQ(step, 0.5e-3f);        // the finest step (the block's 1 m extent needs no more than 2,000)
+    EXPECT_FLOAT_EQ(cstep, 1.0f / 65535);  // its largest confidence (1) in 16 bits
+    const auto vertex_bytes = read_at<std::uint32_t>(body, 40), index_bytes = read_at<std::uint32_t>(body, 44);
+    const auto pad = [](std::size_t n) { return (n + 3) / 4 * 4; };
+    ASSERT_EQ(body.size(), 48 + pad(vertex_bytes) + pad(index_bytes));
+    // meshoptimizer's decoders read the codes back: 12-byte records and the triangle.
+    std::uint8_t records[3 * 12];
+    ASSERT_EQ(meshopt_decodeVertexBuffer(records, 3, 12, reinterpret_cast<const unsigned char*>(body.data()) + 48, vertex_bytes), 0);
+    std::uint32_t tri[3];
+    ASSERT_EQ(meshopt_decodeIndexBuffer(tri, 3, 4, reinterpret_cast<const unsigned char*>(body.data()) + 48 + pad(vertex_bytes), index_bytes), 0);
+    const auto record = [&](int i, int field) { return read_at<std::uint16_t>(std::string(reinterpret_cast<char*>(records), sizeof records), 12 * i + 2 * field); };
+    // The one triangle keeps its orientation: its corners in cyclic order are vertices 0, 1, 2.
+    int first = 0;
+    while (record(tri[first], 0) != 0 || record(tri[first], 1) != 0) ++first;  // vertex 0: the lowest corner itself
+    const int v1 = static_cast<int>(tri[(first + 1) % 3]), v2 = static_cast<int>(tri[(first + 2) % 3]);
+    EXPECT_EQ(record(v1, 0), 2000);  // x = 1.5 - 0.5 = 1 m
+    EXPECT_EQ(record(v1, 1), 0);
+    EXPECT_EQ(record(v2, 1), 2000);  // y of vertex 2
+    EXPECT_EQ(record(v2, 2), 1000);  // z = 0.5 m
+    EXPECT_EQ(record(v1, 3), 16384);  // confidence 0.25: 16383.75 steps
+    EXPECT_EQ(records[12 * v2 + 8], 3);  // level of vertex 2
+    EXPECT_EQ(records[12 * v2 + 9], 0);  // zero bytes
 
     ls::Header h;
     h.flags = ls::kReset | ls::kFinal;
@@ -65,7 +89,7 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     const std::string m = ls::encode_message(h, trajectory, removed, blocks);
     ASSERT_EQ(m.size(), 112u + 2 * 12 + 12 + body.size());
     EXPECT_EQ(m.substr(0, 4), "LSLV");
-    EXPECT_EQ(read_at<std::uint32_t>(m, 4), 1u);
+    EXPECT_EQ(read_at<std::uint32_t>(m, 4), 2u);
     EXPECT_EQ(read_at<std::uint32_t>(m, 8), 3u);
     EXPECT_EQ(read_at<std::uint32_t>(m, 12), 42u);
     EXPECT_EQ(read_at<double>(m, 24), 2000.0);
@@ -79,7 +103,9 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     EXPECT_EQ(m.substr(148), body);
 }
 
-TEST(LiveStream, TheTownDrivesBlocksComeBackWithinATenthOfAMillimetre) {
+TEST(LiveStream, TheTownDrivesBlocksComeBackWithinAQuarterOfAMillimetre) {
+    // Within half a position step (0.25 mm, or 1/131070 of a block's extent if more) and a
+    // confidence step: matched triangle by triangle, in the stream's own vertex order.
     // The drive moved 300 km away: the positions' float32 are relative to the stream's origin.
     const Eigen::Vector3d far(3e5, -2e5, 40);
     const std::vector<test::Scan>& drive = test::town_drive();
@@ -111,15 +137,22 @@ TEST(LiveStream, TheTownDrivesBlocksComeBackWithinATenthOfAMillimetre) {
     ASSERT_EQ(m.removed.size(), 1u);
     EXPECT_TRUE(m.removed[0] == removed[0]);
     ASSERT_EQ(m.changed.size(), delta.changed.size());
+    std::size_t bytes = 0, v1_bytes = 0;
     for (std::size_t i = 0; i < m.changed.size(); ++i) {
         const Mesh &got = m.changed[i].mesh, &sent = delta.changed[i].mesh;
         EXPECT_TRUE(m.changed[i].key == delta.changed[i].key);
-        ASSERT_EQ(got.vertices.size(), sent.vertices.size());
-        EXPECT_TRUE(got.triangles == sent.triangles);
-        EXPECT_TRUE(got.levels == sent.levels);
-        EXPECT_TRUE(got.confidence == sent.confidence);
-        for (std::size_t v = 0; v < got.vertices.size(); ++v) ASSERT_LT((got.vertices[v] - sent.vertices[v]).norm(), 1e-4);
+        ASSERT_EQ(got.triangles.size(), sent.triangles.size());
+        ASSERT_LE(got.vertices.size(), sent.vertices.size());
+        Eigen::AlignedBox3d box;
+        for (const auto& v : sent.vertices) box.extend(v);
+        const double half_step = std::max(box.sizes().maxCoeff() / 131070, 0.25e-3);
+        ASSERT_LT(half_step, 0.26e-3);
+        ASSERT_EQ(test::unmatched_triangles(got, sent, half_step + 1e-6, test::confidence_step(sent) + 1e-7), 0u) << "block " << i;
+        bytes += bodies[i].size();
+        v1_bytes += 20 + 17 * sent.vertices.size() + (4 - sent.vertices.size() % 4) % 4 + 12 * sent.triangles.size();
     }
+    // Float32 arrays as they are took 4 times as much.
+    EXPECT_LT(4 * bytes, v1_bytes + v1_bytes / 2);
 }
 
 TEST(LiveStream, MalformedMessagesAreRefused) {
@@ -139,14 +172,25 @@ TEST(LiveStream, MalformedMessagesAreRefused) {
     bad[0] = 'X';
     EXPECT_THROW(ls::decode(bytes_of(bad)), FormatError);
     bad = good;
-    bad[4] = 2;  // version 2
+    bad[4] = 1;  // version 1
     EXPECT_THROW(ls::decode(bytes_of(bad)), FormatError);
     bad = good;
     const std::uint32_t huge = 0xFFFFFFFFu;
     std::memcpy(bad.data() + 88, &huge, 4);  // a count larger than the message
     EXPECT_THROW(ls::decode(bytes_of(bad)), FormatError);
-    bad = good;
-    const std::uint32_t out_of_block = 3;  // the block has vertices 0..2
-    std::memcpy(bad.data() + bad.size() - 4, &out_of_block, 4);
-    EXPECT_THROW(ls::decode(bytes_of(bad)), FormatError);
+    for (const std::uint32_t nv : {2u, 70000u}) {  // fewer vertices than the triangle uses, or more than a block can hold
+        bad = good;
+        std::memcpy(bad.data() + 136 + 12, &nv, 4);  // the block follows the header (112), a trajectory point and a removed key
+        EXPECT_THROW(ls::decode(bytes_of(bad)), FormatError) << nv;
+    }
+    for (std::size_t at = 136 + 48; at < good.size(); ++at) {  // any byte of the codes changed: refused, or triangles within the block
+        bad = good;
+        bad[at] = static_cast<char>(bad[at] ^ 0x5A);
+        try {
+            const ls::Message m = ls::decode(bytes_of(bad));
+            for (const auto& t : m.changed.at(0).mesh.triangles)
+                for (const std::uint32_t v : t) ASSERT_LT(v, 3u);
+        } catch (const FormatError&) {
+        }
+    }
 }

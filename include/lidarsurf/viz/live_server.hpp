@@ -27,6 +27,7 @@ struct LiveServerConfig {
     int port = 8080;                 ///< 0: a free port chosen by the system (port() tells it)
     std::size_t max_clients = 16;    ///< WebSocket clients at once; more are refused (HTTP 503)
     std::size_t max_message_bytes = std::size_t{4} << 20;  ///< a catch-up is cut into messages of about this size
+    std::size_t send_buffer_bytes = std::size_t{1} << 20;  ///< each client's socket send buffer (SO_SNDBUF)
     double write_timeout = 10;       ///< seconds a client may take to take one message
     double request_timeout = 10;     ///< seconds a client may take to send its request, or to answer a close
     /// Throws InvalidArgument naming the first bad field.
@@ -56,6 +57,7 @@ public:
         std::size_t dropped = 0;   ///< clients dropped for an error, a message, a timeout
         std::size_t messages = 0;  ///< messages sent
         std::size_t bytes = 0;     ///< bytes of messages sent
+        std::size_t wire_bytes = 0;  ///< bytes they took on the wire (permessage-deflate, WebSocket frames)
     };
     Stats stats() const;
 

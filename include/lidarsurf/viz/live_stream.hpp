@@ -7,9 +7,14 @@
 //     major, translation relative to the origin), and the counts of the three parts below;
 //   trajectory: sensor positions (3 float32 each) the client has not had yet, in order;
 //   removed: block keys (3 int32 each) left without a triangle;
-//   changed: blocks, each its key (3 int32), vertex and triangle counts (uint32), positions
-//     (3 float32 a vertex, relative to the origin), confidence (float32 a vertex), levels (uint8
-//     a vertex, zero-padded to 4 bytes), triangles (3 uint32 each, indices within the block).
+//   changed: blocks, each its key (3 int32), vertex and triangle counts (uint32), the block's
+//     lowest corner (3 float32, relative to the origin), its position step and confidence step
+//     (float32), and the byte lengths (uint32) of its vertices and triangles, both compressed by
+//     meshoptimizer's codecs (each zero-padded to 4 bytes): vertex records of 12 bytes (x, y, z
+//     and confidence as uint16 steps from the corner and from 0, the level as uint8, 3 zero
+//     bytes), and 3 uint32 indices a triangle. The position step is 0.5 mm (the block's extent
+//     / 65535 for a block past 32 m), so positions keep a quarter of a millimetre; the vertices
+//     are in meshoptimizer's order, not the block mesh's (a vertex no triangle uses is left out).
 // Applying a message: drop every block if kReset, then the removed blocks, then put each changed
 // block in place of the one with its key.
 #include <cstdint>
@@ -24,7 +29,7 @@
 
 namespace lidarsurf::live_stream {
 
-inline constexpr std::uint32_t kVersion = 1;
+inline constexpr std::uint32_t kVersion = 2;
 inline constexpr std::size_t kHeaderBytes = 112;
 
 enum Flags : std::uint32_t {
@@ -42,7 +47,9 @@ struct Header {
 };
 
 /// A changed block's part of a message (key, counts, arrays), to be encoded once and sent to
-/// every client. Vertices without levels or confidence get 0.
+/// every client. Vertices without levels or confidence get 0. Throws InvalidArgument for a block
+/// of more than 65,535 vertices or 131,072 triangles (a block of 8^3 cubes has at most ~2,200
+/// vertices).
 std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin);
 
 /// One message: the header, the trajectory positions (world), the removed keys and the blocks
@@ -50,7 +57,7 @@ std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin);
 std::string encode_message(const Header& header, std::span<const Eigen::Vector3d> trajectory, std::span<const VoxelKey> removed,
                            std::span<const std::string* const> blocks);
 
-/// A message read back (world coordinates, within float32 of what was sent).
+/// A message read back (world coordinates, within the quantization of what was sent).
 struct Message {
     Header header;
     std::vector<Eigen::Vector3d> trajectory;
@@ -59,7 +66,8 @@ struct Message {
 };
 
 /// Reads a message. Throws FormatError when it is not one: wrong magic or version, counts that
-/// disagree with its size, a triangle index out of its block.
+/// disagree with its size or exceed a block's, data that does not decode, a triangle index out of
+/// its block.
 Message decode(std::span<const std::uint8_t> bytes);
 
 /// Applies a message to a client's blocks (kept in (z, y, x) key order, as apply(MeshDelta)).
