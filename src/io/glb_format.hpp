@@ -25,7 +25,6 @@ struct GlbLayout {
     static GlbLayout of(const Mesh& mesh);
     /// Bytes per interleaved vertex record: position, normal, confidence, level (padded to 4).
     std::uint32_t stride() const;
-    bool same_attributes(const GlbLayout& o) const { return normals == o.normals && levels == o.levels && confidence == o.confidence; }
 };
 
 /// A vertex's position as the file holds it: its float offset from the origin.
@@ -40,9 +39,9 @@ struct PositionBounds {
 };
 
 /// The interleaved vertex records of `mesh`, but those whose `existing` entry is >= 0 (empty:
-/// all); `bounds` grows by the positions written.
+/// all); `bounds`, when given, grows by the positions written.
 void write_glb_vertices(std::ostream& out, const GlbLayout& layout, const Mesh& mesh, std::span<const std::int64_t> existing,
-                        PositionBounds& bounds);
+                        PositionBounds* bounds);
 /// The triangles' indices as uint32, each through `index` (none: as is). Throws InvalidInput past
 /// 2^32 - 1.
 void write_glb_indices(std::ostream& out, std::span<const std::array<std::uint32_t, 3>> triangles,

@@ -76,7 +76,7 @@ GlbLayout GlbLayout::of(const Mesh& mesh) {
 
 std::uint32_t GlbLayout::stride() const { return 12 + (normals ? 12 : 0) + (confidence ? 4 : 0) + (levels ? 4 : 0); }
 
-void write_glb_vertices(std::ostream& out, const GlbLayout& l, const Mesh& mesh, std::span<const std::int64_t> existing, PositionBounds& bounds) {
+void write_glb_vertices(std::ostream& out, const GlbLayout& l, const Mesh& mesh, std::span<const std::int64_t> existing, PositionBounds* bounds) {
     const std::uint32_t stride = l.stride();
     constexpr std::size_t kPiece = std::size_t{1} << 20;
     std::vector<char> piece(kPiece);
@@ -85,7 +85,7 @@ void write_glb_vertices(std::ostream& out, const GlbLayout& l, const Mesh& mesh,
         if (!existing.empty() && existing[i] >= 0) continue;
         if (static_cast<std::size_t>(at - piece.data()) + stride > piece.size()) out.write(piece.data(), at - piece.data()), at = piece.data();
         const Eigen::Vector3f p = offset_from(mesh.vertices[i], l.origin);
-        bounds.add(p);
+        if (bounds) bounds->add(p);
         for (int a = 0; a < 3; ++a) at = put<float>(at, p[a]);
         if (l.normals) {
             const Eigen::Vector3f u = unit_normal(mesh.normals[i]);
@@ -285,8 +285,7 @@ void write_glb(const Mesh& mesh, std::ostream& out, bool draco) {
     for (const auto& v : mesh.vertices) bounds.add(detail::offset_from(v, l.origin));
     detail::write_glb_header(out, detail::glb_json(l, mesh.vertices.size(), mesh.triangles.size(), bounds),
                              detail::glb_binary_length(l, mesh.vertices.size(), mesh.triangles.size()));
-    detail::PositionBounds written;
-    detail::write_glb_vertices(out, l, mesh, {}, written);
+    detail::write_glb_vertices(out, l, mesh, {}, nullptr);  // the bounds are in the JSON already
     detail::write_glb_indices(out, mesh.triangles, {});
 }
 

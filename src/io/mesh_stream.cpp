@@ -86,7 +86,7 @@ void MeshStreamWriter::append(const Mesh& part, std::span<const std::int64_t> ex
         p.bytes = {};
         glb_->draco.push_back(std::move(p));
     } else if (format_ == MeshFormat::Glb) {
-        detail::write_glb_vertices(vertex_records_, glb_->layout, part, existing, glb_->bounds);
+        detail::write_glb_vertices(vertex_records_, glb_->layout, part, existing, &glb_->bounds);
         detail::write_glb_indices(face_records_, part.triangles, [&](std::uint32_t i) { return index[i]; });
     } else {
         const detail::PlyLayout l{format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_};
