@@ -107,6 +107,9 @@ void add_reconstruct_options(CLI::App* app, ReconstructOptions& o) {
                                       "every level gives the same mesh, bit for bit)");
     app->add_option("--format", o.format, "Input format: auto | bin | ply | pcd | xyz")->capture_default_str();
     app->add_option("--bin-fields", o.bin_fields, "float32 values per point in .bin input (KITTI 4, nuScenes 5)")->capture_default_str();
+    app->add_option("--intensity-field", o.intensity_field,
+                    "Which float32 of a .bin record is the intensity (KITTI and nuScenes 3; -1: none, the mesh gets no intensity)")
+        ->capture_default_str();
     auto given = [](bool& flag) { return [&flag](const std::string&) { flag = true; }; };
     app->add_option("--imls-radius", o.imls.radius, "IMLS support radius r in metres (default alpha * k_max)")->each(given(o.imls_radius));
     app->add_option("--imls-k", o.imls.normal_k, "IMLS neighbours for the normals (default N_min)")->each(given(o.imls_k));
@@ -161,6 +164,7 @@ Method resolve_method(const ReconstructOptions& o) {
     m.sensor = parse_vec3(o.origin, "--origin");
     m.read.format = parse_point_format(o.format);
     m.read.bin_fields = o.bin_fields;
+    m.read.intensity_field = o.intensity_field;
     m.read.max_bytes = static_cast<std::size_t>(m.config.max_memory_mb * 1048576.0);  // the input alone must fit the budget
     if (!o.simd.empty()) set_simd_level(simd_level_from_string(o.simd.c_str()));
     m.imls_config = ImlsConfig::matching(m.config, m.config.threads);

@@ -40,6 +40,7 @@ struct ReconstructOptions {
     std::string format = "auto", origin = "0,0,0", mode = "an+gc", method = "default";
     std::string simd;  // empty: the widest this CPU has (core/simd.hpp)
     int bin_fields = 4;
+    int intensity_field = PointReadOptions{}.intensity_field;  // -1: none
     ReconstructionConfig config;  // paper defaults, defined once in ReconstructionConfig
     ImlsConfig imls;              // only the fields given on the command line are used
     bool imls_radius = false, imls_k = false, imls_h = false, imls_truncation = false;

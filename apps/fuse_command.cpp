@@ -265,7 +265,7 @@ public:
         if (by_tiles()) reaches_.push_back(scan_reach(cloud.points, pose * m_.sensor, !no_return_.empty()));
         const double before = rec_.summary().seconds_insert + rec_.summary().seconds_carve;
         const auto t_update = std::chrono::steady_clock::now();
-        rec_.integrate(cloud.points, pose * m_.sensor, no_return_);
+        rec_.integrate(cloud.points, pose * m_.sensor, no_return_, cloud.intensities);
         nlohmann::json row = {{"frame", in_.scans[n].frame},
                               {"drive", in_.scans[n].drive},
                               {"integrate_ms", 1e3 * (rec_.summary().seconds_insert + rec_.summary().seconds_carve - before)},

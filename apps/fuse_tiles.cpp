@@ -24,7 +24,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     // and the directions of its rays that returned nothing (when carving takes them).
     const bool empty_rays = m.config.carve && m.config.carve_empty_range > 0;
     const auto read_scan = [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) {
-        return in.read(n, m.read, empty_rays ? &no_return : nullptr).points;  // NaN stays NaN: no tile keeps it
+        return in.read(n, m.read, empty_rays ? &no_return : nullptr);  // NaN stays NaN: no tile keeps it
     };
     std::vector<ScanReach> reach;
     reach.reserve(in.scans.size());
@@ -33,8 +33,8 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
         std::vector<Eigen::Vector3f> no_return;
         for (std::size_t n = 0; n < in.scans.size(); ++n) {
             no_return.clear();
-            const std::vector<Eigen::Vector3d> points = read_scan(n, no_return);
-            reach.push_back(scan_reach(points, in.pose(n) * m.sensor, !no_return.empty()));
+            const PointCloud cloud = read_scan(n, no_return);
+            reach.push_back(scan_reach(cloud.points, in.pose(n) * m.sensor, !no_return.empty()));
             progress.update(n + 1);
         }
         progress.finish();

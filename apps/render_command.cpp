@@ -17,7 +17,7 @@ CLI::App* add_render_command(CLI::App& app, RenderOptions& o) {
         "  lidarsurf render mesh.ply -o levels.png --colour level --eye -20,-15,12 --target 5,0,-1\n");
     r->add_option("input", o.input, "Mesh (.ply, .obj)")->required();
     r->add_option("-o,--output", o.output, "Output picture (.png)")->required();
-    r->add_option("--colour,--color", o.colour, "height | level (k', meshes from reconstruct) | grey")->capture_default_str();
+    r->add_option("--colour,--color", o.colour, "height | level (k', meshes from reconstruct) | intensity (meshes of points with one) | grey")->capture_default_str();
     r->add_option("--width", o.width, "Width in pixels")->capture_default_str();
     r->add_option("--height", o.height, "Height in pixels")->capture_default_str();
     r->add_option("--eye", o.eye, "Camera position x,y,z (default: above and behind the mesh's median)");

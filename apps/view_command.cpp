@@ -54,8 +54,8 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
         "  lidarsurf view mesh.ply                               (writes mesh.html)\n"
         "  lidarsurf view mesh.ply -o scan.html --points scan.bin --colour level\n"
         "In the page: orbit with the left button, pan with the right one (or shift), zoom with the wheel;\n"
-        "the panel colours by height, neighbourhood level k', confidence (magenta: below tau, inferred surface)\n"
-        "or normal, and toggles the wireframe and\n"
+        "the panel colours by height, neighbourhood level k', confidence (magenta: below tau, inferred surface),\n"
+        "intensity (grey over its 2nd-98th percentiles) or normal, and toggles the wireframe and\n"
         "the input points. The URL's hash sets them too: mesh.html#colour=level&wireframe=1&points=1.\n");
     v->add_option("input", o.input, "Mesh (.ply, .obj)")->required();
     v->add_option("-o,--output", o.output, "Output page (.html; default: the mesh's name with .html)");
@@ -63,7 +63,8 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
     v->add_option("--max-points", o.max_points, "Show at most this many of them (every n-th)")->capture_default_str();
     v->add_option("--scan,--message", o.points_scan, "With --points REC (a recording): its scan to show, from 0")->capture_default_str()->check(CLI::NonNegativeNumber);
     add_recording_options(v, o.recording);
-    v->add_option("--colour,--color", o.colour, "Colouring when the page opens: height | level | confidence | normal | grey")->capture_default_str();
+    v->add_option("--colour,--color", o.colour, "Colouring when the page opens: height | level | confidence | intensity | normal | grey")
+        ->capture_default_str();
     v->add_option("--title", o.title, "Title of the page (default: the mesh's file name)");
     o.tau = ReconstructionConfig{}.tau;
     v->add_option("--tau", o.tau,
@@ -75,8 +76,9 @@ CLI::App* add_view_command(CLI::App& app, ViewOptions& o) {
 
 int run_view(const ViewOptions& o) {
     require_viewer();
-    if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "normal" && o.colour != "grey")
-        throw InvalidArgument("--colour must be height, level, confidence, normal or grey (got '" + o.colour + "')");
+    if (o.colour != "height" && o.colour != "level" && o.colour != "confidence" && o.colour != "intensity" && o.colour != "normal" &&
+        o.colour != "grey")
+        throw InvalidArgument("--colour must be height, level, confidence, intensity, normal or grey (got '" + o.colour + "')");
     if (o.max_points < 1) throw InvalidArgument("--max-points must be >= 1");
     if (!std::isfinite(o.tau) || o.tau <= 0) throw InvalidArgument("--tau must be finite and > 0");
     const fs::path output = o.output.empty() ? fs::path(o.input).replace_extension(".html") : fs::path(o.output);
@@ -122,6 +124,7 @@ int run_view(const ViewOptions& o) {
     data["triangles"] = base64(indices);
     data["levels"] = mesh.levels.size() == mesh.vertices.size() ? base64(mesh.levels) : "";
     data["confidence"] = mesh.confidence.size() == mesh.vertices.size() ? base64(mesh.confidence) : "";
+    data["intensity"] = mesh.intensity.size() == mesh.vertices.size() ? base64(mesh.intensity) : "";
     data["tau"] = o.tau;
     data["points"] = base64(cloud);
     const std::string page = viewer_page(data);

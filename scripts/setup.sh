@@ -12,6 +12,7 @@ PKGS=(
   liblzf-dev           # PCD binary_compressed (LZF)
   libmeshoptimizer-dev # mesh simplification (--simplify)
   libdraco-dev         # Draco compression of binary glTF (--mesh-format glb-draco)
+  libtinygltf-dev      # tests: Draco's glTF decoder reads the .glb files back
   libgtest-dev         # unit tests
   libbenchmark-dev     # micro-benchmarks
   libembree-dev        # ray casting: simulator and renderer

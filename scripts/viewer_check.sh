@@ -3,7 +3,8 @@
 # through SwiftShader) takes screenshots of a demo mesh coloured by height and by level; the mesh
 # must cover a good part of the picture, and switching the colouring must change it. Then a VLP-16
 # frame of the town coloured by confidence: both the measured surface (the ramp) and the surface
-# bridged between its rings (magenta, confidence below tau) must show.
+# bridged between its rings (magenta, confidence below tau) must show; coloured by intensity, it is
+# grey (its materials' reflectivity), from dark to light.
 # Usage: viewer_check.sh LIDARSURF_CLI [WORK_DIR]
 set -euo pipefail
 cli=$1
@@ -26,6 +27,9 @@ done
 timeout 120 "$browser" --headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader --hide-scrollbars \
   --window-size=900,600 --virtual-time-budget=10000 --screenshot="$work/confidence.png" "file://$work/vlp16.html#colour=confidence" \
   >"$work/chromium-confidence.log" 2>&1 || { cat "$work/chromium-confidence.log"; exit 1; }
+timeout 120 "$browser" --headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader --hide-scrollbars \
+  --window-size=900,600 --virtual-time-budget=10000 --screenshot="$work/intensity.png" "file://$work/vlp16.html#colour=intensity" \
+  >"$work/chromium-intensity.log" 2>&1 || { cat "$work/chromium-intensity.log"; exit 1; }
 /usr/bin/python3 - "$work" "$(dirname "$0")" <<'PY'
 import sys
 sys.path.insert(0, sys.argv[2])
@@ -46,4 +50,12 @@ magenta = sum(1 for p in mesh if p[0] > p[1] + 40 and p[2] > p[1] + 40)
 print(f"viewer-check: the VLP-16 mesh covers {100 * len(mesh) / total:.1f} %; magenta (inferred) {100 * magenta / max(1, len(mesh)):.1f} % of it")
 assert len(mesh) > 0.05 * total, "the VLP-16 mesh is not visible"
 assert 0.02 * len(mesh) < magenta < 0.9 * len(mesh), "the confidence colouring does not tell inferred from measured surface"
+# Intensity: the mesh's pixels are grey (lit, so r = g = b within rounding), dark and light ones both.
+inten = pixels(work + "/intensity.png")
+shown = [p for row in inten for p in row if max(abs(p[i] - BACKGROUND[i]) for i in range(3)) > 12]
+greys = sorted(p[0] for p in shown if max(p) - min(p) <= 3)
+print(f"viewer-check: by intensity, {100 * len(greys) / max(1, len(shown)):.1f} % of the mesh's pixels grey, "
+      f"5th-95th percentile {greys[len(greys) // 20] if greys else 0}-{greys[19 * len(greys) // 20] if greys else 0}")
+assert len(shown) > 0.05 * total and len(greys) > 0.95 * len(shown), "the intensity colouring is not grey"
+assert greys[19 * len(greys) // 20] - greys[len(greys) // 20] > 40, "the intensity colouring shows one grey"
 PY

@@ -14,6 +14,7 @@
 #include "lidarsurf/mesh/marching_cubes.hpp"
 #include "lidarsurf/mesh/mesh_filter.hpp"
 #include "lidarsurf/mesh/simplify.hpp"
+#include "lidarsurf/mesh/vertex_intensity.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 #include "lidarsurf/surface/tsdf_field.hpp"
 #include "lidarsurf/core/format_value.hpp"
@@ -51,37 +52,45 @@ Reconstructor::Reconstructor(const ReconstructionConfig& config, const Eigen::Ve
     if (!sensor.allFinite()) throw InvalidArgument("sensor origin must be finite");
 }
 
-void Reconstructor::integrate(const PointCloud& cloud) { integrate(std::span<const Eigen::Vector3d>(cloud.points)); }
+void Reconstructor::integrate(const PointCloud& cloud) { integrate(std::span<const Eigen::Vector3d>(cloud.points), cloud.intensities); }
 
-void Reconstructor::integrate(std::span<const Eigen::Vector3d> points) {
-    add(points, grid_.has_viewpoints() ? std::optional<Eigen::Vector3d>(sensor_) : std::nullopt, points);
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, std::span<const float> intensity) {
+    add(points, grid_.has_viewpoints() ? std::optional<Eigen::Vector3d>(sensor_) : std::nullopt, points, {}, intensity);
 }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint) {
-    integrate_seen(points, viewpoint, points, {});
+    integrate_seen(points, viewpoint, points, {}, {});
 }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint,
-                              std::span<const Eigen::Vector3f> no_return) {
-    integrate_seen(points, viewpoint, points, no_return);
+                              std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity) {
+    integrate_seen(points, viewpoint, points, no_return, intensity);
 }
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
-                              std::span<const Eigen::Vector3f> no_return) {
+                              std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity) {
+    if (!intensity.empty() && intensity.size() != points.size())
+        throw InvalidArgument("intensity: " + std::to_string(intensity.size()) + " values for " + std::to_string(points.size()) + " points");
     std::vector<Eigen::Vector3d> kept;
-    for (const Eigen::Vector3d& p : points)
-        if (keep.contains(p)) kept.push_back(p);  // a non-finite point is in no box
-    integrate_seen(kept, viewpoint, points, no_return);  // summary().points_read counts the points kept
+    std::vector<float> kept_intensity;
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (keep.contains(points[i])) {  // a non-finite point is in no box
+            kept.push_back(points[i]);
+            if (!intensity.empty()) kept_intensity.push_back(intensity[i]);
+        }
+    // summary().points_read counts the points kept.
+    integrate_seen(kept, viewpoint, points, no_return, kept_intensity);
 }
 
 void Reconstructor::integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint,
-                                   std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return) {
+                                   std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return,
+                                   std::span<const float> intensity) {
     if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
     if (!grid_.has_viewpoints()) {
         grid_.enable_viewpoints(sensor_);  // the points integrated before were seen from the sensor
         if (grid_.point_count() > 0) previous_.reset();  // every orientation may change: evaluate all again
     }
-    add(points, viewpoint, scan, no_return);
+    add(points, viewpoint, scan, no_return, intensity);
     last_viewpoint_ = viewpoint;
 }
 
@@ -105,7 +114,9 @@ MeshDelta Reconstructor::update_mesh(double budget_ms) {
 }
 
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
-                        std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return) {
+                        std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity) {
+    if (!intensity.empty() && intensity.size() != points.size())
+        throw InvalidArgument("intensity: " + std::to_string(intensity.size()) + " values for " + std::to_string(points.size()) + " points");
     const auto t0 = std::chrono::steady_clock::now();
     // The budget is checked between chunks; one chunk holds a whole HDL-64 frame (~120k points):
     // a frame cut in two chunks paid two groupings and two parallel updates (0.6-0.8 ms).
@@ -131,7 +142,8 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
                                                     " m; nothing of this chunk was integrated"));
             }
         }
-        summary_.points_dropped += arena.execute([&] { return grid_.insert(chunk, seen_from, carving ? &chunk_hits : nullptr); });
+        summary_.points_dropped += arena.execute([&] { return grid_.insert(chunk, seen_from, carving ? &chunk_hits : nullptr,
+                                                                                intensity.empty() ? intensity : intensity.subspan(begin, end - begin)); });
         summary_.points_read += chunk.size();  // a refused chunk leaves no trace, in the counts either
         for (VoxelGrid::Hit h : chunk_hits) {
             h.point += static_cast<std::uint32_t>(begin);
@@ -201,6 +213,7 @@ Mesh Reconstructor::extract_mesh(Evaluation evaluation) {
                 mesh = lidarsurf::extract_mesh(field, placement);
             }
         }
+        attach_intensity(mesh, grid_, config.max_reach());
         remove_small_components(mesh, static_cast<std::size_t>(config_.min_component_triangles));
         simplify_mesh(mesh, config_.simplify);
         summary_.seconds_mesh = seconds_since(t0);
@@ -224,6 +237,7 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
         const auto t0 = std::chrono::steady_clock::now();
         std::erase_if(seeded.cubes, [&](const VoxelKey& cube) { return !owns(cube); });
         mesh = lidarsurf::extract_mesh(seeded.field, seeded.cubes, vertex_placement());
+        attach_intensity(mesh, grid_, config.max_reach());
         simplify_mesh(mesh, config_.simplify);  // the seams are the part's borders: kept
         summary_.seconds_mesh = seconds_since(t0);
     });
@@ -348,7 +362,7 @@ void MethodConfig::validate() const {
 }
 
 Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& sensor,
-                      std::string* summary) {
+                      std::string* summary, std::span<const float> intensity) {
     method.validate();
     if (method.imls) {
         PointCloud cloud;  // IMLS keeps its own copy for its kd-tree
@@ -359,7 +373,7 @@ Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3
         return mesh;
     }
     Reconstructor rec(method.config, sensor);
-    rec.integrate(points);
+    rec.integrate(points, intensity);
     Mesh mesh = rec.extract_mesh();
     if (summary) *summary = rec.summary().to_string();
     return mesh;

@@ -5,7 +5,8 @@
 //    that served it (io/live_stream.hpp has the format): the map so far, then each scan's
 //    changed blocks, the sensor's pose and trajectory; the last message holds the final mesh.
 // Orbit with the left button, pan with the right one (or shift), zoom with the wheel. The panel
-// switches the colouring (height, neighbourhood level k', Gaussian confidence, normal, grey), the
+// switches the colouring (height, neighbourhood level k', Gaussian confidence, intensity, normal,
+// grey), the
 // wireframe, the points and, live, whether the camera follows the sensor; the URL's hash sets
 // them too: #colour=level&wireframe=1&points=0&follow=0. The surface is lit by its normals.
 (function () {
@@ -21,14 +22,16 @@
 
   // ---- Colourings: height over the 2nd-98th percentile, k' over 1..k_max, confidence over
   // [tau, 1] and, below tau (the mesh's Eq. (3) threshold), magenta: surface inferred between scan
-  // rings (bridges), not measured.
+  // rings (bridges), not measured; intensity as a grey ramp over its 2nd-98th percentile (pale
+  // blue: a vertex no return reached).
   function ramp(t, c) {
     t = Math.min(1, Math.max(0, t));
     return c.setHSL(0.66 * (1 - t), 0.75, 0.5);
   }
   const grey = new THREE.Color(0.7, 0.7, 0.7), none = new THREE.Color(0.6, 0.6, 0.6), inferred = new THREE.Color(0.85, 0.25, 0.85);
+  const unread = new THREE.Color(0.55, 0.65, 0.8);
   const tau = typeof data.tau === "number" && data.tau > 0 ? data.tau : 0.2;
-  const range = { zlo: 0, zhi: 1, kmax: 1 };
+  const range = { zlo: 0, zhi: 1, kmax: 1, ilo: 0, ihi: 1 };
   const modes = {
     height: (p, i, c) => ramp((p.positions[3 * i + 2] - range.zlo) / (range.zhi - range.zlo), c),
     level: (p, i, c) => (p.levels.length ? ramp((p.levels[i] - 1) / Math.max(1, range.kmax - 1), c) : c.copy(none)),
@@ -36,6 +39,13 @@
       if (!p.confidence.length) return c.copy(none);
       const v = p.confidence[i];
       return v < tau ? c.copy(inferred) : ramp((v - tau) / Math.max(1 - tau, tau), c);
+    },
+    intensity: (p, i, c) => {
+      if (!p.intensity.length) return c.copy(none);
+      const v = p.intensity[i];
+      if (!(v === v)) return c.copy(unread);
+      const g = 0.08 + 0.9 * Math.min(1, Math.max(0, (v - range.ilo) / (range.ihi - range.ilo)));
+      return c.setRGB(g, g, g);
     },
     normal: (p, i, c) => {
       const n = p.geometry.attributes.normal.array;
@@ -75,14 +85,28 @@
     }
     p.geometry.attributes.color.needsUpdate = true;
   }
-  function addPiece(name, positions, indices, levels, confidence) {
+  // The intensity ramp's range: the 2nd and 98th percentiles of the finite values shown (of at
+  // most 200,000 of them, evenly taken).
+  function intensityRange() {
+    let n = 0;
+    for (const p of pieces.values()) n += p.intensity.length;
+    if (!n) return;
+    const step = Math.max(1, Math.floor(n / 200000)), values = [];
+    for (const p of pieces.values())
+      for (let i = 0; i < p.intensity.length; i += step) if (p.intensity[i] === p.intensity[i]) values.push(p.intensity[i]);
+    if (!values.length) return;
+    values.sort((a, b) => a - b);
+    range.ilo = values[Math.floor(0.02 * (values.length - 1))];
+    range.ihi = Math.max(range.ilo + 1e-6, values[Math.floor(0.98 * (values.length - 1))]);
+  }
+  function addPiece(name, positions, indices, levels, confidence, intensity) {
     removePiece(name);
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
     geometry.setIndex(new THREE.BufferAttribute(indices, 1));
     geometry.computeVertexNormals();
     geometry.setAttribute("color", new THREE.BufferAttribute(new Float32Array(positions.length), 3));
-    const p = { positions, indices, levels, confidence, geometry, object: new THREE.Mesh(geometry, material) };
+    const p = { positions, indices, levels, confidence, intensity, geometry, object: new THREE.Mesh(geometry, material) };
     for (let i = 0; i < levels.length; i++) if (levels[i] > range.kmax) range.kmax = levels[i];
     colour(p);
     surface.add(p.object);
@@ -192,6 +216,7 @@
   const info = document.getElementById("info");
   let cloud = null;
   function apply() {
+    if (settings.colour === "intensity") intensityRange();
     for (const p of pieces.values()) colour(p);
     material.wireframe = settings.wireframe;
     if (cloud) cloud.visible = settings.points;
@@ -253,8 +278,10 @@
   if (!live) {
     origin = data.centre || [0, 0, 0];
     const positions = decode(data.vertices, Float32Array);
-    addPiece("mesh", positions, decode(data.indices || data.triangles, Uint32Array), decode(data.levels, Uint8Array), decode(data.confidence, Float32Array));
+    addPiece("mesh", positions, decode(data.indices || data.triangles, Uint32Array), decode(data.levels, Uint8Array), decode(data.confidence, Float32Array),
+             decode(data.intensity, Float32Array));
     heights.update(true);
+    intensityRange();
     for (const p of pieces.values()) colour(p);
     const nv = positions.length / 3;
     const median = (axis) => {
@@ -311,7 +338,7 @@
   function receive(buffer) {
     const dv = new DataView(buffer);
     const magic = String.fromCharCode(dv.getUint8(0), dv.getUint8(1), dv.getUint8(2), dv.getUint8(3));
-    if (magic !== "LSLV" || dv.getUint32(4, true) !== 2) throw new Error("not a lidarsurf live stream (version 2)");
+    if (magic !== "LSLV" || dv.getUint32(4, true) !== 3) throw new Error("not a lidarsurf live stream (version 3)");
     const flags = dv.getUint32(8, true);
     scans = dv.getUint32(12, true);
     origin = [dv.getFloat64(16, true), dv.getFloat64(24, true), dv.getFloat64(32, true)];
@@ -328,14 +355,16 @@
     at += 12 * nRemoved;
     for (let i = 0; i < nRemoved; i++) removePiece(removed[3 * i] + "," + removed[3 * i + 1] + "," + removed[3 * i + 2]);
     // A block: its vertex records and triangles in meshoptimizer's codecs; positions in 16-bit
-    // steps from the block's lowest corner, confidence in 16-bit steps from 0.
+    // steps from the block's lowest corner, confidence in 16-bit steps from 0, intensity in 16-bit
+    // steps from its base (65535: none; a step below 0: the block has no intensity).
     for (let b = 0; b < nChanged; b++) {
       const k = new Int32Array(buffer, at, 3);
       const nv = dv.getUint32(at + 12, true), nt = dv.getUint32(at + 16, true);
       const base = [dv.getFloat32(at + 20, true), dv.getFloat32(at + 24, true), dv.getFloat32(at + 28, true)];
       const step = dv.getFloat32(at + 32, true), cstep = dv.getFloat32(at + 36, true);
-      const vertexBytes = dv.getUint32(at + 40, true), indexBytes = dv.getUint32(at + 44, true);
-      at += 48;
+      const ibase = dv.getFloat32(at + 40, true), istep = dv.getFloat32(at + 44, true);
+      const vertexBytes = dv.getUint32(at + 48, true), indexBytes = dv.getUint32(at + 52, true);
+      at += 56;
       const records = new Uint8Array(12 * nv);
       MeshoptDecoder.decodeVertexBuffer(records, nv, 12, new Uint8Array(buffer, at, vertexBytes));
       at += (vertexBytes + 3) & ~3;
@@ -344,13 +373,15 @@
       at += (indexBytes + 3) & ~3;
       const q = new Uint16Array(records.buffer);
       const positions = new Float32Array(3 * nv), confidence = new Float32Array(nv), levels = new Uint8Array(nv);
+      const intensity = new Float32Array(istep >= 0 ? nv : 0);
       for (let i = 0; i < nv; i++) {
         for (let a = 0; a < 3; a++) positions[3 * i + a] = base[a] + q[6 * i + a] * step;
         confidence[i] = q[6 * i + 3] * cstep;
         levels[i] = records[12 * i + 8];
+        if (istep >= 0) intensity[i] = q[6 * i + 5] === 65535 ? NaN : ibase + q[6 * i + 5] * istep;
       }
       for (let i = 0; i < indices.length; i++) if (indices[i] >= nv) throw new Error("a triangle index out of its block");
-      addPiece(k[0] + "," + k[1] + "," + k[2], positions, indices, levels, confidence);
+      addPiece(k[0] + "," + k[1] + "," + k[2], positions, indices, levels, confidence, intensity);
     }
     // The sensor: position and heading (the pose's x axis); the camera follows it when asked.
     const position = new THREE.Vector3(pose[3], pose[7], pose[11]);
@@ -358,7 +389,15 @@
     sensor.setDirection(new THREE.Vector3(pose[0], pose[4], pose[8]).normalize());
     sensor.visible = true;
     if (settings.follow) target.copy(position);
-    if (heights.update() || flags & kReset) for (const p of pieces.values()) colour(p);
+    // The intensity ramp follows the map: its range is taken again every tenth scan (and at a reset
+    // or the end), the blocks recoloured when it moved by over 5 %.
+    let recolour = heights.update() || flags & kReset;
+    if (settings.colour === "intensity" && (flags & (kReset | kFinal) || scans % 10 === 0)) {
+      const [lo, hi] = [range.ilo, range.ihi];
+      intensityRange();
+      recolour = recolour || Math.abs(range.ilo - lo) + Math.abs(range.ihi - hi) > 0.05 * (hi - lo);
+    }
+    if (recolour) for (const p of pieces.values()) colour(p);
     state = flags & kFinal ? "final" : flags & kMore ? "catching up" : "live";
     describe(state);
     draw();

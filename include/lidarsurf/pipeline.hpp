@@ -58,13 +58,15 @@ public:
                   const std::optional<Eigen::Vector3d>& grid_origin = std::nullopt);
 
     /// Adds the finite points of `cloud` to the voxel statistics; counts the others as dropped.
+    /// With the cloud's intensities, the voxels keep their mean and the mesh's vertices get one
+    /// (Mesh::intensity; every overload below takes them as `intensity`, one per point or none).
     /// Throws ResourceLimit (with an estimate) when the grid would outgrow config.max_memory_mb.
     /// Points are taken in chunks of 262,144: a chunk that would not fit is refused before it
     /// changes the grid (the chunks of the same call before it stay), so the Reconstructor keeps
     /// taking later batches that fit.
     void integrate(const PointCloud& cloud);
     /// The same on a view (no copy): used by the Python bindings on numpy arrays.
-    void integrate(std::span<const Eigen::Vector3d> points);
+    void integrate(std::span<const Eigen::Vector3d> points, std::span<const float> intensity = {});
     /// Points seen from `viewpoint` (same frame as the points, e.g. a sequence's world frame with
     /// the pose's translation). The first call turns on per-voxel viewpoints for good: each
     /// vertex's normal is then oriented toward the mean viewpoint of the points near it
@@ -74,12 +76,13 @@ public:
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint);
     /// The same, with the unit directions (world frame) of the scan's rays that returned nothing:
     /// free-space carving takes them as free space up to config.carve_empty_range.
-    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3f> no_return);
+    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3f> no_return,
+                   std::span<const float> intensity = {});
     /// A part of a map (tiles/tiles.hpp): of the scan's points seen from `viewpoint`, only those
     /// inside `keep` (world) are integrated, while free-space carving takes the whole scan (a ray
     /// through the part may return outside it). summary().points_read counts the points kept.
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
-                   std::span<const Eigen::Vector3f> no_return = {});
+                   std::span<const Eigen::Vector3f> no_return = {}, std::span<const float> intensity = {});
     /// A scan of a sequence that reaches nothing of this grid (a part of a map, tiles/tiles.hpp):
     /// free-space carving counts it, as it counts every scan of the drive.
     void skip_scan();
@@ -125,11 +128,11 @@ public:
 private:
     /// integrate(points, viewpoint) of `points`, taken from the whole scan `scan` (carving sees it).
     void integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3d> scan,
-                        std::span<const Eigen::Vector3f> no_return);
+                        std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity);
     /// Inserts `points`; carving (on) sees `scan`, the whole scan they are taken from, and its rays
     /// that returned nothing.
     void add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
-             std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return = {});
+             std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return = {}, std::span<const float> intensity = {});
     void ensure_carver();
     double budget_bytes() const;
     std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;
@@ -183,12 +186,13 @@ struct MethodConfig {
 
 /// The one entry point that the CLI, the Python module and the benchmark call: the points, seen from
 /// `sensor`, meshed by `method`. `summary`, when given, gets one line of counts and times. The mesh
-/// may be empty (too sparse a cloud); the caller decides whether that is an error.
+/// may be empty (too sparse a cloud); the caller decides whether that is an error. `intensity`
+/// (one per point, or none) reaches the mesh's vertices (IMLS ignores it).
 Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& sensor,
-                      std::string* summary = nullptr);
+                      std::string* summary = nullptr, std::span<const float> intensity = {});
 inline Mesh reconstruct_with(const MethodConfig& method, const PointCloud& cloud, const Eigen::Vector3d& sensor,
                              std::string* summary = nullptr) {
-    return reconstruct_with(method, std::span<const Eigen::Vector3d>(cloud.points), sensor, summary);
+    return reconstruct_with(method, std::span<const Eigen::Vector3d>(cloud.points), sensor, summary, cloud.intensities);
 }
 
 }  // namespace lidarsurf

@@ -64,6 +64,10 @@ void bind_mesh(py::module_& m) {
         .def_property_readonly(
             "confidence", [](py::object self) { return vector_view<float, 1>(self.cast<const Mesh&>().confidence, self); },
             "(V,) float32 Gaussian confidence of Eq. (3) per vertex (empty when absent).")
+        .def_property_readonly(
+            "intensity", [](py::object self) { return vector_view<float, 1>(self.cast<const Mesh&>().intensity, self); },
+            "(V,) float32 mean intensity of the returns in each vertex's neighbourhood, in the sensor's unit (empty when "
+            "the points had none; NaN where no return near a vertex had one).")
         .def(
             "save",
             [](const Mesh& mesh, const std::string& path, const std::string& format) {

@@ -28,6 +28,15 @@ struct SharedReconstructor {
     std::mutex mutex;
 };
 
+// An optional (N,) array of intensities as floats (empty for None); ValueError for another length.
+std::vector<float> intensity_values(const py::handle& intensity, std::size_t n) {
+    if (intensity.is_none()) return {};
+    const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(intensity);
+    if (!a || a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n)
+        throw py::value_error("intensity must be a 1-D array of " + std::to_string(n) + " values (one per point)");
+    return {a.data(), a.data() + n};
+}
+
 }  // namespace
 
 void bind_reconstructor(py::module_& m) {
@@ -65,19 +74,23 @@ void bind_reconstructor(py::module_& m) {
              "Raises ValueError on a bad parameter.")
         .def(
             "integrate",
-            [](SharedReconstructor& self, const py::handle& points) {
+            [](SharedReconstructor& self, const py::handle& points, const py::handle& intensity) {
                 const PointArray view = points_view(points, "points");
+                const std::vector<float> values = intensity_values(intensity, static_cast<std::size_t>(view.shape(0)));
                 py::gil_scoped_release release;
                 const std::lock_guard lock(self.mutex);
-                self.rec.integrate(as_span(view));
+                self.rec.integrate(as_span(view), values);
             },
-            py::arg("points"),
+            py::arg("points"), py::arg("intensity") = py::none(),
             "Add an (N, 3) float32/float64 array of points to the voxel statistics; non-finite points are counted as dropped. "
-            "Raises MemoryError past the memory budget.")
+            "`intensity`: an (N,) array of the returns' intensities, which the mesh's vertices then carry (Mesh.intensity). "
+            "Raises MemoryError past the memory budget, ValueError for an intensity array of another length.")
         .def(
             "integrate_from",
-            [](SharedReconstructor& self, const py::handle& points, const std::vector<double>& viewpoint, const py::handle& no_return) {
+            [](SharedReconstructor& self, const py::handle& points, const std::vector<double>& viewpoint, const py::handle& no_return,
+               const py::handle& intensity) {
                 const PointArray view = points_view(points, "points");
+                const std::vector<float> values = intensity_values(intensity, static_cast<std::size_t>(view.shape(0)));
                 const Eigen::Vector3d seen_from = as_vec3(viewpoint, "viewpoint");
                 std::vector<Eigen::Vector3f> empty;
                 if (!no_return.is_none()) {
@@ -87,14 +100,14 @@ void bind_reconstructor(py::module_& m) {
                 }
                 py::gil_scoped_release release;
                 const std::lock_guard lock(self.mutex);
-                self.rec.integrate(as_span(view), seen_from, empty);
+                self.rec.integrate(as_span(view), seen_from, empty, values);
             },
-            py::arg("points"), py::arg("viewpoint"), py::arg("no_return") = py::none(),
+            py::arg("points"), py::arg("viewpoint"), py::arg("no_return") = py::none(), py::arg("intensity") = py::none(),
             "Add points seen from `viewpoint` (same frame, e.g. world points and the pose's translation): for sequences. "
             "The first call turns on per-voxel viewpoints, so each part of the surface is oriented toward where it was "
             "seen from; points added by integrate() count as seen from the origin. `no_return`: an (M, 3) array of the "
             "directions (same frame) of the scan's rays that returned nothing, which carving takes as free space up to "
-            "Config.carve_empty_range.")
+            "Config.carve_empty_range. `intensity`: as for integrate().")
         .def(
             "extract_mesh",
             [](SharedReconstructor& self) {

@@ -94,13 +94,15 @@ struct Sequence {
                                       " scans, " + std::to_string(poses.size()) + " poses)");
     }
     /// `no_return`, when given, receives the directions (world) of its rays that returned nothing.
-    std::vector<Eigen::Vector3d> scan(std::size_t n, std::vector<Eigen::Vector3f>* no_return = nullptr) {
-        if (drive) return drive->world_scan(frames[n], no_return).points;
+    std::vector<Eigen::Vector3d> scan(std::size_t n, std::vector<Eigen::Vector3f>* no_return = nullptr) { return cloud(n, no_return).points; }
+    // Scan n in the world frame, with its intensities when it has them.
+    PointCloud cloud(std::size_t n, std::vector<Eigen::Vector3f>* no_return = nullptr) {
+        if (drive) return drive->world_scan(frames[n], no_return);
         PointCloud cloud = read_points(seq->scan(frames[n]));
         const Eigen::Isometry3d& pose = poses[frames[n]];
         if (no_return) *no_return = pattern ? empty_rays(*pattern, cloud.points, pose.linear()) : std::vector<Eigen::Vector3f>{};
         for (Eigen::Vector3d& p : cloud.points) p = pose * p;  // NaN stays NaN
-        return std::move(cloud.points);
+        return cloud;
     }
     Eigen::Vector3d viewpoint(std::size_t n) const { return drive ? Eigen::Vector3d(poses[frames[n]] * drive->origin()) : poses[frames[n]].translation(); }
 };
@@ -248,7 +250,7 @@ void bind_tiles(py::module_& m) {
                 const bool empty_rays = config.carve && config.carve_empty_range > 0;
                 const Mesh mesh = fuse_tile(
                     plan, {tile.first, tile.second},
-                    [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) { return seq.scan(n, empty_rays ? &no_return : nullptr); }, &s);
+                    [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) { return seq.cloud(n, empty_rays ? &no_return : nullptr); }, &s);
                 triangles = mesh.triangles.size(), vertices = mesh.vertices.size();
                 if (!output.empty() && triangles > 0) write_mesh(mesh, output, format);
             }

@@ -463,7 +463,7 @@ def test_live_messages_have_the_documented_layout_and_read_back():
     data = lidarsurf.encode_live_message(7, origin, pose, [[1003.0, 2004.0, 10.5]], [(-1, 2, -3)], [((5, 6, -7), tri)],
                                          reset=True, final=True)
     # The header and the block's fields as docs/live_view.md lays them out.
-    assert data[:4] == b"LSLV" and struct.unpack_from("<III", data, 4) == (2, 1 | 2, 7)
+    assert data[:4] == b"LSLV" and struct.unpack_from("<III", data, 4) == (3, 1 | 2, 7)
     assert struct.unpack_from("<3d", data, 16) == origin
     assert struct.unpack_from("<12f", data, 40)[3::4] == (3.0, 4.0, 0.5)  # translation relative to the origin
     assert struct.unpack_from("<III", data, 88) == (1, 1, 1)
@@ -473,8 +473,9 @@ def test_live_messages_have_the_documented_layout_and_read_back():
     assert key == (5, 6, -7) and counts == (3, 1) and corner == (0.0, 0.0, 0.0)
     step, cstep = struct.unpack_from("<2f", data, 168)
     assert step == pytest.approx(0.5e-3) and cstep == 0  # the finest step (1 m needs no more); no confidence
-    vertex_bytes, index_bytes = struct.unpack_from("<II", data, 176)
-    assert len(data) == 184 + (vertex_bytes + 3) // 4 * 4 + (index_bytes + 3) // 4 * 4
+    assert struct.unpack_from("<2f", data, 176) == (0.0, -1.0)  # no intensity
+    vertex_bytes, index_bytes = struct.unpack_from("<II", data, 184)
+    assert len(data) == 192 + (vertex_bytes + 3) // 4 * 4 + (index_bytes + 3) // 4 * 4
 
     m = lidarsurf.decode_live_message(data)
     assert (m["scans"], m["reset"], m["final"], m["more"]) == (7, True, True, False)
@@ -564,3 +565,29 @@ def test_read_recording_gives_the_scans_with_times_and_poses_from_a_trajectory(t
         lidarsurf.read_recording(pcap, returns="third")
     with pytest.raises(ValueError):
         list(lidarsurf.read_recording(pcap, metadata=os.path.join(_OUSTER, "OS-0-32-U1_v2.2.0_1024x10.json")))
+
+
+def test_intensity_reaches_the_mesh(scan, tmp_path):
+    # Stripes 8 m wide along x, bright (0.8) and dark (0.1): every vertex reads a mean of the two,
+    # and one far from a border reads its stripe's value.
+    bright = (np.floor(scan[:, 0] / 8.0) % 2 == 0)
+    intensity = np.where(bright, 0.8, 0.1).astype(np.float32)
+    rec = lidarsurf.Reconstructor()
+    rec.integrate(scan, intensity=intensity)
+    mesh = rec.extract_mesh()
+    assert mesh.intensity.shape == (len(mesh.vertices),)
+    assert np.all((mesh.intensity >= 0.1 - 1e-6) & (mesh.intensity <= 0.8 + 1e-6))
+    x = mesh.vertices[:, 0]
+    frac = x / 8.0 - np.floor(x / 8.0)
+    # Farther than H^5 and a voxel from a border, and not bridged (a bridge takes a wider box).
+    inner = (np.minimum(frac, 1 - frac) * 8.0 > 1.5) & (mesh.confidence >= lidarsurf.Config().tau)
+    expected = np.where(np.floor(x / 8.0) % 2 == 0, 0.8, 0.1)
+    assert inner.sum() > 1000
+    assert np.mean(np.abs(mesh.intensity[inner] - expected[inner]) < 1e-5) > 0.995
+    mesh.save(str(tmp_path / "m.ply"))
+    assert b"property float intensity" in (tmp_path / "m.ply").read_bytes()[:600]
+    with pytest.raises(ValueError, match="one per point"):
+        rec.integrate(scan[:10], intensity=intensity[:9])
+    plain = lidarsurf.Reconstructor()
+    plain.integrate(scan)
+    assert plain.extract_mesh().intensity.shape == (0,)

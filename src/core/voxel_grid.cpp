@@ -145,10 +145,16 @@ std::size_t VoxelGrid::remove(std::size_t voxel) {
         keys_[voxel] = keys_[last];
         stats_[voxel] = stats_[last];
         if (viewpoints_enabled_) viewpoint_means_[voxel] = viewpoint_means_[last];
+        if (intensity_enabled_) {
+            intensity_[voxel] = intensity_[last];
+        }
     }
     keys_.pop_back();
     stats_.pop_back();
     if (viewpoints_enabled_) viewpoint_means_.pop_back();
+    if (intensity_enabled_) {
+        intensity_.pop_back();
+    }
     return last;
 }
 
@@ -175,6 +181,7 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
     const std::size_t before = keys_.size();
     const auto v = static_cast<std::size_t>(voxel_index(key));
     if (v >= stats_.size()) stats_.resize(v + 1);
+    if (intensity_enabled_) intensity_.resize(stats_.size());
     stats_[v].add(local);
     ++points_;
     if (tracking_) {
@@ -185,10 +192,12 @@ void VoxelGrid::insert(const Eigen::Vector3d& world) {
 }
 
 std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint,
-                              std::vector<Hit>* hits) {
+                              std::vector<Hit>* hits, std::span<const float> intensity) {
     if (viewpoints_enabled_ && !viewpoint) throw InvalidArgument("this grid has viewpoints: insert points with the position they were seen from");
     if (viewpoint && !viewpoint->allFinite()) throw InvalidArgument("viewpoint must be finite");
     const std::size_t n = points.size();
+    if (!intensity.empty() && intensity.size() != n)
+        throw InvalidArgument("intensity: " + std::to_string(intensity.size()) + " values for " + std::to_string(n) + " points");
     std::size_t first = 0;
     while (first < n && !points[first].allFinite()) ++first;
     if (first == n) {
@@ -286,6 +295,14 @@ std::size_t VoxelGrid::insert(std::span<const Eigen::Vector3d> points, const std
             viewpoint_means_[v] = (mean + (local - mean) * (k / static_cast<double>(stats_[v].count))).cast<float>();
         }
     }
+    if (!intensity.empty() && !intensity_enabled_) {
+        intensity_enabled_ = true;  // the voxels before hold no point with an intensity
+        intensity_.assign(stats_.size(), IntensityMean{});
+    }
+    if (intensity_enabled_) {
+        intensity_.resize(stats_.size());
+        if (!intensity.empty()) add_intensity(intensity, voxel, order, runs);
+    }
     if (hits) {
         hits->clear();
         hits->reserve(runs.size() - 1);
@@ -328,6 +345,39 @@ std::optional<Eigen::Vector3d> VoxelGrid::mean_viewpoint(const VoxelKey& lo, con
     return sum / count;
 }
 
+void VoxelGrid::add_intensity(std::span<const float> intensity, std::span<const std::uint32_t> voxel, std::span<const std::uint32_t> order,
+                              std::span<const std::size_t> runs) {
+    // Per voxel (disjoint, so in parallel): the running mean over its finite values, point by
+    // point in point order, so that a voxel's mean does not depend on how its points were
+    // batched (a tile's voxels equal the whole map's to the last bit).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 512), [&](const auto& r) {
+        for (std::size_t run = r.begin(); run != r.end(); ++run) {
+            const std::uint32_t v = voxel[order[runs[run]]];
+            float mean = intensity_[v].mean;
+            std::uint32_t count = intensity_[v].count;
+            for (std::size_t j = runs[run]; j < runs[run + 1]; ++j) {
+                const float value = intensity[order[j]];
+                if (!std::isfinite(value)) continue;
+                ++count;
+                mean = static_cast<float>(mean + (static_cast<double>(value) - mean) / count);
+            }
+            intensity_[v] = {mean, count};
+        }
+    });
+}
+
+std::optional<double> VoxelGrid::mean_intensity(const VoxelKey& lo, const VoxelKey& hi) const {
+    if (!intensity_enabled_) return std::nullopt;
+    double count = 0, sum = 0;
+    for_each_index_in_box(lo, hi, [&](const VoxelKey&, std::size_t v) {
+        const IntensityMean& m = intensity_[v];
+        count += m.count;
+        sum += static_cast<double>(m.count) * m.mean;
+    });
+    if (count <= 0) return std::nullopt;
+    return sum / count;
+}
+
 void VoxelGrid::clear_touched() {
     for (std::uint32_t b : touched_) touched_flag_[b] = 0;
     touched_.clear();
@@ -343,7 +393,7 @@ std::size_t VoxelGrid::slot_bytes() const {
 std::size_t VoxelGrid::memory_bytes() const {
     return index_.memory_bytes() + slots_.capacity() * sizeof(Slots) + slot_bytes() + occupancy_.capacity() * sizeof(Occupancy) + stats_.capacity() * sizeof(VoxelStats) +
            keys_.capacity() * sizeof(VoxelKey) + touched_flag_.capacity() + touched_.capacity() * sizeof(std::uint32_t) +
-           viewpoint_means_.capacity() * sizeof(Eigen::Vector3f);
+           viewpoint_means_.capacity() * sizeof(Eigen::Vector3f) + intensity_.capacity() * sizeof(IntensityMean);
 }
 
 std::pair<std::size_t, std::size_t> VoxelGrid::count_new(std::span<const Eigen::Vector3d> points) const {
@@ -380,6 +430,7 @@ std::size_t VoxelGrid::memory_bytes_after(std::size_t new_voxels, std::size_t ne
     std::size_t bytes = grown(keys_.capacity(), voxels) * sizeof(VoxelKey);
     bytes += grown(stats_.capacity(), voxels) * sizeof(VoxelStats);
     if (viewpoints_enabled_) bytes += grown(viewpoint_means_.capacity(), voxels) * sizeof(Eigen::Vector3f);
+    if (intensity_enabled_) bytes += grown(intensity_.capacity(), voxels) * sizeof(IntensityMean);
     bytes += grown(occupancy_.capacity(), blocks) * sizeof(Occupancy) + grown(touched_flag_.capacity(), blocks) +
              grown(touched_.capacity(), blocks) * sizeof(std::uint32_t);
     // The blocks' voxel lists grow by doubling: up to twice the new voxels' indices.

@@ -1,8 +1,10 @@
 #pragma once
 // Internal: bounds-checked reading of binary scalars and text tokens from a buffer.
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <string_view>
 
@@ -47,6 +49,12 @@ inline double load_scalar(const char* p, ScalarType t, bool big_endian) {
         case ScalarType::Float64: return load<double>(p, big_endian);
     }
     return 0;
+}
+
+/// A value read as a double, stored as a float attribute (intensity, confidence): NaN where it
+/// does not fit a float (converting it would be undefined) or is not a number.
+inline float to_float_or_nan(double v) {
+    return std::fabs(v) <= std::numeric_limits<float>::max() ? static_cast<float>(v) : std::numeric_limits<float>::quiet_NaN();
 }
 
 /// Parses a whole token as a double (accepts nan/inf); false if it is not a number.

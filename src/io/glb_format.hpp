@@ -18,14 +18,17 @@
 namespace lidarsurf::detail {
 
 struct GlbLayout {
-    bool normals = false, levels = false, confidence = false;
+    bool normals = false, levels = false, confidence = false, intensity = false;
     /// The mesh node's translation: positions are float offsets from it (whole metres).
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     /// The layout of `mesh`'s attributes, its origin its first vertex rounded down to the metre.
     static GlbLayout of(const Mesh& mesh);
-    /// Bytes per interleaved vertex record: position, normal, confidence, level (padded to 4).
+    /// Bytes per interleaved vertex record: position, normal, confidence, intensity, level (padded to 4).
     std::uint32_t stride() const;
 };
+
+/// A vertex's intensity as the file holds it: glTF refuses NaN, so a vertex without one is -1.
+inline float glb_intensity(float v) { return v == v ? v : -1.0f; }
 
 /// A vertex's position as the file holds it: its float offset from the origin.
 inline Eigen::Vector3f offset_from(const Eigen::Vector3d& v, const Eigen::Vector3d& origin) { return (v - origin).cast<float>(); }
@@ -52,10 +55,10 @@ struct DracoPrimitive {
     std::string bytes;  ///< the Draco bitstream (empty once written to a spill file)
     std::uint64_t length = 0, vertices = 0, triangles = 0;
     PositionBounds bounds;
-    int position_id = -1, normal_id = -1, confidence_id = -1, level_id = -1;  ///< Draco attribute ids
+    int position_id = -1, normal_id = -1, confidence_id = -1, intensity_id = -1, level_id = -1;  ///< Draco attribute ids
 };
 /// `mesh` (its attributes as `layout` has them) compressed: positions to 1 mm, normals to 10 bits,
-/// confidence to 10 bits over its range, levels exact. Throws InvalidInput if Draco refuses.
+/// confidence to 10 bits and intensity to 12 bits over their ranges, levels exact. Throws InvalidInput if Draco refuses.
 DracoPrimitive draco_primitive(const Mesh& mesh, const GlbLayout& layout);
 
 /// The JSON chunk of one plain primitive (vertex records then indices in the binary chunk).

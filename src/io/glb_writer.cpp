@@ -24,7 +24,7 @@ constexpr int kUnsignedByte = 5121, kUnsignedInt = 5125, kFloat = 5126;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963, kTriangles = 4;
 constexpr std::uint32_t kGlbMagic = 0x46546C67, kJsonChunk = 0x4E4F534A, kBinChunk = 0x004E4942;
 constexpr double kDracoPositionStep = 1e-3;  // metres
-constexpr int kDracoNormalBits = 10, kDracoConfidenceBits = 10;
+constexpr int kDracoNormalBits = 10, kDracoConfidenceBits = 10, kDracoIntensityBits = 12;
 
 template <typename T>
 char* put(char* at, T v) {
@@ -69,12 +69,12 @@ nlohmann::json accessor(int component, std::uint64_t count, const char* type) {
 }  // namespace
 
 GlbLayout GlbLayout::of(const Mesh& mesh) {
-    GlbLayout l{!mesh.normals.empty(), !mesh.levels.empty(), !mesh.confidence.empty(), Eigen::Vector3d::Zero()};
+    GlbLayout l{!mesh.normals.empty(), !mesh.levels.empty(), !mesh.confidence.empty(), !mesh.intensity.empty(), Eigen::Vector3d::Zero()};
     if (!mesh.vertices.empty()) l.origin = mesh.vertices.front().array().floor().matrix();
     return l;
 }
 
-std::uint32_t GlbLayout::stride() const { return 12 + (normals ? 12 : 0) + (confidence ? 4 : 0) + (levels ? 4 : 0); }
+std::uint32_t GlbLayout::stride() const { return 12 + (normals ? 12 : 0) + (confidence ? 4 : 0) + (intensity ? 4 : 0) + (levels ? 4 : 0); }
 
 void write_glb_vertices(std::ostream& out, const GlbLayout& l, const Mesh& mesh, std::span<const std::int64_t> existing, PositionBounds* bounds) {
     const std::uint32_t stride = l.stride();
@@ -92,6 +92,7 @@ void write_glb_vertices(std::ostream& out, const GlbLayout& l, const Mesh& mesh,
             for (int a = 0; a < 3; ++a) at = put<float>(at, u[a]);
         }
         if (l.confidence) at = put<float>(at, mesh.confidence[i]);
+        if (l.intensity) at = put<float>(at, glb_intensity(mesh.intensity[i]));
         if (l.levels) at = put<std::uint32_t>(at, mesh.levels[i]);  // the byte, then three of padding
     }
     out.write(piece.data(), at - piece.data());
@@ -126,6 +127,7 @@ DracoPrimitive draco_primitive(const Mesh& mesh, const GlbLayout& l) {
     const int pos = add(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32, 4);
     const int nrm = l.normals ? add(draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32, 4) : -1;
     const int conf = l.confidence ? add(draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32, 4) : -1;
+    const int inten = l.intensity ? add(draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32, 4) : -1;
     const int lev = l.levels ? add(draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8, 1) : -1;
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
         const draco::AttributeValueIndex v(static_cast<std::uint32_t>(i));
@@ -137,6 +139,10 @@ DracoPrimitive draco_primitive(const Mesh& mesh, const GlbLayout& l) {
             dm.attribute(nrm)->SetAttributeValue(v, u.data());
         }
         if (conf >= 0) dm.attribute(conf)->SetAttributeValue(v, &mesh.confidence[i]);
+        if (inten >= 0) {
+            const float value = glb_intensity(mesh.intensity[i]);
+            dm.attribute(inten)->SetAttributeValue(v, &value);
+        }
         if (lev >= 0) dm.attribute(lev)->SetAttributeValue(v, &mesh.levels[i]);
     }
     dm.SetNumFaces(mesh.triangles.size());
@@ -151,6 +157,7 @@ DracoPrimitive draco_primitive(const Mesh& mesh, const GlbLayout& l) {
     encoder.SetAttributeQuantization(pos, bits);
     if (nrm >= 0) encoder.SetAttributeQuantization(nrm, kDracoNormalBits);
     if (conf >= 0) encoder.SetAttributeQuantization(conf, kDracoConfidenceBits);
+    if (inten >= 0) encoder.SetAttributeQuantization(inten, kDracoIntensityBits);
     encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
     draco::EncoderBuffer buffer;
     const draco::Status status = encoder.EncodeToBuffer(&buffer);
@@ -160,6 +167,7 @@ DracoPrimitive draco_primitive(const Mesh& mesh, const GlbLayout& l) {
     prim.position_id = static_cast<int>(dm.attribute(pos)->unique_id());
     if (nrm >= 0) prim.normal_id = static_cast<int>(dm.attribute(nrm)->unique_id());
     if (conf >= 0) prim.confidence_id = static_cast<int>(dm.attribute(conf)->unique_id());
+    if (inten >= 0) prim.intensity_id = static_cast<int>(dm.attribute(inten)->unique_id());
     if (lev >= 0) prim.level_id = static_cast<int>(dm.attribute(lev)->unique_id());
     return prim;
 }
@@ -197,6 +205,7 @@ std::string glb_json(const GlbLayout& l, std::uint64_t vertices, std::uint64_t t
     (*position)["min"] = bounds_json(bounds, false), (*position)["max"] = bounds_json(bounds, true);
     if (l.normals) attribute("NORMAL", kFloat, "VEC3", 12);
     if (l.confidence) attribute("_CONFIDENCE", kFloat, "SCALAR", 4);
+    if (l.intensity) attribute("_INTENSITY", kFloat, "SCALAR", 4);
     if (l.levels) attribute("_LEVEL", kUnsignedByte, "SCALAR", 4);
     nlohmann::json indices = accessor(kUnsignedInt, triangles * 3, "SCALAR");
     indices["bufferView"] = 1;
@@ -229,6 +238,7 @@ std::string glb_json(const GlbLayout& l, std::span<const DracoPrimitive> primiti
         attribute("POSITION", kFloat, "VEC3", p.position_id);
         attribute("NORMAL", kFloat, "VEC3", p.normal_id);
         attribute("_CONFIDENCE", kFloat, "SCALAR", p.confidence_id);
+        attribute("_INTENSITY", kFloat, "SCALAR", p.intensity_id);
         attribute("_LEVEL", kUnsignedByte, "SCALAR", p.level_id);
         const std::size_t indices = accessors.size();
         accessors.push_back(accessor(kUnsignedInt, p.triangles * 3, "SCALAR"));

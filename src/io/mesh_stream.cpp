@@ -45,11 +45,11 @@ void MeshStreamWriter::append(const Mesh& part, std::span<const std::int64_t> ex
     if (!existing.empty() && existing.size() != part.vertices.size())
         throw InvalidArgument("MeshStreamWriter: one `existing` entry per vertex of the part");
     if (part.triangles.empty()) return;
-    const bool n = !part.normals.empty(), k = !part.levels.empty(), c = !part.confidence.empty();
+    const bool n = !part.normals.empty(), k = !part.levels.empty(), c = !part.confidence.empty(), g = !part.intensity.empty();
     if (!has_layout_) {
-        has_layout_ = true, normals_ = n, levels_ = k, confidence_ = c;
+        has_layout_ = true, normals_ = n, levels_ = k, confidence_ = c, intensity_ = g;
         if (glb_) glb_->layout = detail::GlbLayout::of(part);
-    } else if (n != normals_ || k != levels_ || c != confidence_) {
+    } else if (n != normals_ || k != levels_ || c != confidence_ || g != intensity_) {
         throw InvalidArgument("MeshStreamWriter: a part with other vertex attributes than the first");
     }
     // The part's vertex i is written as index[i].
@@ -89,7 +89,7 @@ void MeshStreamWriter::append(const Mesh& part, std::span<const std::int64_t> ex
         detail::write_glb_vertices(vertex_records_, glb_->layout, part, existing, &glb_->bounds);
         detail::write_glb_indices(face_records_, part.triangles, [&](std::uint32_t i) { return index[i]; });
     } else {
-        const detail::PlyLayout l{format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_};
+        const detail::PlyLayout l{format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_, intensity_};
         detail::write_ply_vertices(vertex_records_, l, part, existing);
         detail::write_ply_faces(face_records_, l, part.triangles, [&](std::uint32_t i) { return index[i]; });
     }
@@ -111,7 +111,7 @@ void MeshStreamWriter::commit() {
             detail::write_glb_header(out, detail::glb_json(glb_->layout, vertices_, triangles_, glb_->bounds),
                                      detail::glb_binary_length(glb_->layout, vertices_, triangles_));
         else
-            detail::write_ply_header(out, {format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_}, vertices_, triangles_);
+            detail::write_ply_header(out, {format_ == MeshFormat::PlyBinary, dbl_, normals_, levels_, confidence_, intensity_}, vertices_, triangles_);
         for (const char* name : {"vertices", "faces"}) {
             std::ifstream in(spill_->path() / name, std::ios::binary);
             if (!in) throw IoError((spill_->path() / name).string() + ": cannot read the mesh's records back");

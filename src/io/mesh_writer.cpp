@@ -50,18 +50,19 @@ bool needs_double(const Mesh& mesh) {
 namespace detail {
 
 PlyLayout PlyLayout::of(const Mesh& mesh, bool binary, bool dbl) {
-    return {binary, dbl, !mesh.normals.empty(), !mesh.levels.empty(), !mesh.confidence.empty()};
+    return {binary, dbl, !mesh.normals.empty(), !mesh.levels.empty(), !mesh.confidence.empty(), !mesh.intensity.empty()};
 }
 
 void write_ply_header(std::ostream& out, const PlyLayout& l, std::uint64_t vertices, std::uint64_t faces) {
     out << "ply\nformat " << (l.binary ? "binary_little_endian" : "ascii") << " 1.0\n"
-        << "comment lidarsurf mesh; level = neighbourhood level k', confidence = Eq. (3) value\n"
+        << "comment lidarsurf mesh; level = neighbourhood level k', confidence = Eq. (3) value, intensity = the returns' mean\n"
         << "element vertex " << vertices << "\n";
     const char* t = l.dbl ? "double" : "float";
     out << "property " << t << " x\nproperty " << t << " y\nproperty " << t << " z\n";
     if (l.normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
     if (l.levels) out << "property uchar level\n";
     if (l.confidence) out << "property float confidence\n";
+    if (l.intensity) out << "property float intensity\n";
     out << "element face " << faces << "\nproperty list uchar int vertex_indices\nend_header\n";
 }
 
@@ -79,12 +80,13 @@ void write_ply_vertices(std::ostream& out, const PlyLayout& l, const Mesh& mesh,
             if (l.normals) out << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
             if (l.levels) out << ' ' << static_cast<int>(mesh.levels[i]);
             if (l.confidence) out << ' ' << mesh.confidence[i];
+            if (l.intensity) out << ' ' << mesh.intensity[i];
             out << '\n';
         }
         return;
     }
     const std::size_t vertex_bytes = 3 * (l.dbl ? sizeof(double) : sizeof(float)) + (l.normals ? 3 * sizeof(float) : 0) +
-                                     (l.levels ? sizeof(std::uint8_t) : 0) + (l.confidence ? sizeof(float) : 0);
+                                     (l.levels ? sizeof(std::uint8_t) : 0) + (l.confidence ? sizeof(float) : 0) + (l.intensity ? sizeof(float) : 0);
     constexpr std::size_t kPiece = std::size_t{1} << 20;
     std::vector<char> piece(kPiece);
     char* at = piece.data();
@@ -96,6 +98,7 @@ void write_ply_vertices(std::ostream& out, const PlyLayout& l, const Mesh& mesh,
         if (l.normals) for (int a = 0; a < 3; ++a) at = put<float>(at, mesh.normals[i][a]);
         if (l.levels) at = put<std::uint8_t>(at, mesh.levels[i]);
         if (l.confidence) at = put<float>(at, mesh.confidence[i]);
+        if (l.intensity) at = put<float>(at, mesh.intensity[i]);
     }
     out.write(piece.data(), at - piece.data());
 }
@@ -184,6 +187,7 @@ Mesh parse_mesh(std::string_view data, MeshFormat format, const std::string& nam
         mesh.triangles = std::move(content.triangles);
         if (content.levels.size() == mesh.vertices.size()) mesh.levels = std::move(content.levels);
         if (content.confidence.size() == mesh.vertices.size()) mesh.confidence = std::move(content.confidence);
+        if (content.intensity.size() == mesh.vertices.size()) mesh.intensity = std::move(content.intensity);
         return mesh;
     }
     std::string_view rest = data;

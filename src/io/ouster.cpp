@@ -283,13 +283,19 @@ void OusterSweeps::convert_column(const std::uint8_t* pixels, int id, std::uint6
         const std::uint8_t* px = pixels + b * l.pixel_bytes;
         const std::size_t i = static_cast<std::size_t>(id) * h + b;
         for (int r = 0; r < returns; ++r) {
-            std::uint32_t range_mm = 0;
+            // Range and calibrated reflectivity, where each profile puts them (Ouster's firmware
+            // user manual, "Lidar Data Format").
+            std::uint32_t range_mm = 0, reflectivity = 0;
             switch (meta_.profile) {
-                case OusterProfile::Legacy: range_mm = get_le<std::uint32_t>(px) & 0xfffffu; break;
-                case OusterProfile::Single: range_mm = get_le<std::uint32_t>(px) & 0x7ffffu; break;
-                case OusterProfile::Dual: range_mm = get_le<std::uint32_t>(px + 4 * r) & 0x7ffffu; break;
-                case OusterProfile::LowData: range_mm = (get_le<std::uint16_t>(px) & 0x7fffu) << 3; break;
-                case OusterProfile::FusaDual: range_mm = (get_le<std::uint16_t>(px + 4 * r) & 0x7fffu) << 3; break;
+                case OusterProfile::Legacy:
+                    range_mm = get_le<std::uint32_t>(px) & 0xfffffu, reflectivity = get_le<std::uint16_t>(px + 4);
+                    break;
+                case OusterProfile::Single: range_mm = get_le<std::uint32_t>(px) & 0x7ffffu, reflectivity = px[4]; break;
+                case OusterProfile::Dual: range_mm = get_le<std::uint32_t>(px + 4 * r) & 0x7ffffu, reflectivity = px[4 * r + 3]; break;
+                case OusterProfile::LowData: range_mm = (get_le<std::uint16_t>(px) & 0x7fffu) << 3, reflectivity = px[2]; break;
+                case OusterProfile::FusaDual:
+                    range_mm = (get_le<std::uint16_t>(px + 4 * r) & 0x7fffu) << 3, reflectivity = px[4 * r + 2];
+                    break;
             }
             if (range_mm == 0) {
                 if (r == 0) sweep_.no_return.push_back(direction_[i].cast<float>());
@@ -297,6 +303,7 @@ void OusterSweeps::convert_column(const std::uint8_t* pixels, int id, std::uint6
             }
             sweep_.cloud.points.push_back(offset_[i] + 1e-3 * range_mm * direction_[i]);
             sweep_.cloud.rings.push_back(static_cast<std::uint16_t>(b));
+            sweep_.cloud.intensities.push_back(static_cast<float>(reflectivity));
             column_stamp_.push_back(stamp_ns);
         }
     }

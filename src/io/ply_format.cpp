@@ -165,7 +165,7 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
         if (min_record > 0 && el.count > src.remaining_bytes() / min_record)
             throw FormatError(name + ": PLY header claims " + std::to_string(el.count) + " " + el.name +
                               " records but the file holds at most " + std::to_string(src.remaining_bytes() / min_record));
-        int ix = -1, iy = -1, iz = -1, iface = -1, ilevel = -1, iconfidence = -1;
+        int ix = -1, iy = -1, iz = -1, iface = -1, ilevel = -1, iconfidence = -1, iintensity = -1;
         for (std::size_t i = 0; i < el.props.size(); ++i) {
             const auto& p = el.props[i];
             if (p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index")) iface = static_cast<int>(i);
@@ -175,12 +175,15 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
             if (p.name == "z") iz = static_cast<int>(i);
             if (p.name == "level") ilevel = static_cast<int>(i);
             if (p.name == "confidence") iconfidence = static_cast<int>(i);
+            if (iintensity < 0 && (p.name == "intensity" || p.name == "reflectance" || p.name == "scalar_intensity" || p.name == "scalar_Intensity"))
+                iintensity = static_cast<int>(i);
         }
         if (is_vertex) {
             if (ix < 0 || iy < 0 || iz < 0) throw FormatError(name + ": PLY vertex element lacks x, y or z");
             out.vertices.reserve(el.count);
             if (ilevel >= 0) out.levels.reserve(el.count);
             if (iconfidence >= 0) out.confidence.reserve(el.count);
+            if (iintensity >= 0) out.intensity.reserve(el.count);
             have_vertex = true;
         }
         if (is_face && iface < 0) throw FormatError(name + ": PLY face element lacks vertex_indices");
@@ -210,7 +213,8 @@ PlyContent parse_ply(std::string_view data, const std::string& name, bool want_f
                     if (static_cast<int>(i) == iz) xyz.z() = v;
                     if (is_vertex && static_cast<int>(i) == ilevel)
                         out.levels.push_back(static_cast<std::uint8_t>(std::clamp(std::isfinite(v) ? v : 0.0, 0.0, 255.0)));
-                    if (is_vertex && static_cast<int>(i) == iconfidence) out.confidence.push_back(static_cast<float>(v));
+                    if (is_vertex && static_cast<int>(i) == iconfidence) out.confidence.push_back(to_float_or_nan(v));
+                    if (is_vertex && static_cast<int>(i) == iintensity) out.intensity.push_back(to_float_or_nan(v));
                 }
             }
             src.end_record();

@@ -15,6 +15,8 @@ struct PlyContent {
     std::vector<std::array<std::uint32_t, 3>> triangles;  ///< polygons fanned into triangles
     std::vector<std::uint8_t> levels;                     ///< the vertex property `level` (k'), when present
     std::vector<float> confidence;                        ///< the vertex property `confidence` (Eq. 3), when present
+    /// the vertex property `intensity` (or `reflectance`, `scalar_intensity`), when present
+    std::vector<float> intensity;
 };
 
 /// Parses a PLY buffer; faces are read only when `want_faces`.

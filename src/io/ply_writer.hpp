@@ -14,7 +14,7 @@ namespace lidarsurf::detail {
 struct PlyLayout {
     bool binary = true;      ///< binary_little_endian, else ascii
     bool dbl = false;        ///< coordinates as double
-    bool normals = false, levels = false, confidence = false;
+    bool normals = false, levels = false, confidence = false, intensity = false;
     /// The layout of `mesh`'s attributes.
     static PlyLayout of(const Mesh& mesh, bool binary, bool dbl);
     bool operator==(const PlyLayout&) const = default;

@@ -93,6 +93,10 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
         if (integer) time_scale = 1e-9;  // Ouster t, Livox offset_time: ns after the stamp
         if (!integer && (time->name == "timestamp" || time->name == "time_stamp")) absolute = true;  // Hesai: absolute s
     }
+    // Per-point intensity: the calibrated reflectivity where the driver gives it (Ouster, Livox),
+    // else the intensity (Velodyne, Hesai, Ouster's signal) or SemanticKITTI's remission.
+    const PointField2* intensity = field_named(m, {"reflectivity"});
+    if (!intensity) intensity = field_named(m, {"intensity", "remission"});
     RecordedScan scan;
     scan.stamp_ns = m.stamp_ns;
     scan.frame_id = m.frame_id;
@@ -101,6 +105,7 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
     if (n == 0) return scan;  // (and no walk over 2^32 empty rows)
     scan.cloud.points.reserve(n);
     if (time) scan.times.reserve(n);
+    if (intensity) scan.cloud.intensities.reserve(n);
     std::size_t empty = 0;
     const double stamp_s = 1e-9 * static_cast<double>(m.stamp_ns);
     // The usual layout (float32 x, y, z in the host's byte order) is read without the general
@@ -131,6 +136,8 @@ RecordedScan decode_point_cloud2(const PointCloud2Message& m, const std::string&
             }
             if (organized) cells.push_back(row * m.width + col);
             scan.cloud.points.push_back(v);
+            if (intensity)  // a NaN stays NaN: the voxels' means leave it out
+                scan.cloud.intensities.push_back(detail::to_float_or_nan(detail::load_scalar(p + intensity->offset, scalar_type(intensity->datatype), m.big_endian)));
             if (time) {
                 double t = detail::load_scalar(p + time->offset, scalar_type(time->datatype), m.big_endian) * time_scale;
                 if (absolute) t -= stamp_s;

@@ -18,15 +18,17 @@ namespace lidarsurf {
 
 std::size_t drop_non_finite(PointCloud& cloud) {
     const std::size_t before = cloud.points.size();
-    const bool rings = cloud.rings.size() == before;
+    const bool rings = cloud.rings.size() == before, intensities = cloud.intensities.size() == before;
     std::size_t kept = 0;
     for (std::size_t i = 0; i < before; ++i) {
         if (!cloud.points[i].allFinite()) continue;
         if (rings) cloud.rings[kept] = cloud.rings[i];
+        if (intensities) cloud.intensities[kept] = cloud.intensities[i];
         cloud.points[kept++] = cloud.points[i];
     }
     cloud.points.resize(kept);
     if (rings) cloud.rings.resize(kept);
+    if (intensities) cloud.intensities.resize(kept);
     return before - kept;
 }
 
@@ -83,11 +85,14 @@ PointFormat parse_point_format(std::string_view name) {
     throw InvalidArgument("unknown point format '" + std::string(name) + "' (expected auto, bin, ply, pcd, xyz, csv)");
 }
 
-PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name, int ring_field) {
+PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name, int ring_field, int intensity_field) {
     if (fields < 3 || fields > 64) throw InvalidArgument("bin fields per point must be in [3, 64]");
     if (ring_field != -1 && (ring_field < 3 || ring_field >= fields))
         throw InvalidArgument("the ring field must be one of the values after x, y, z: in [3, " + std::to_string(fields - 1) + "] for " +
                               std::to_string(fields) + " float32 per point (got " + std::to_string(ring_field) + ")");
+    if (intensity_field != -1 && (intensity_field < 3 || intensity_field >= fields))
+        throw InvalidArgument("the intensity field must be one of the values after x, y, z: in [3, " + std::to_string(fields - 1) + "] for " +
+                              std::to_string(fields) + " float32 per point (got " + std::to_string(intensity_field) + ")");
     if (data.empty()) throw FormatError(name + ": file is empty");
     const std::size_t record = 4 * static_cast<std::size_t>(fields);
     if (data.size() % record != 0)
@@ -111,12 +116,23 @@ PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string&
             cloud.rings[i] = *ring;
         }
     }
+    if (intensity_field >= 0) {
+        cloud.intensities.resize(n);
+        bool any = false;
+        for (std::size_t i = 0; i < n; ++i) {
+            cloud.intensities[i] = load<float>(data.data() + i * record + 4 * static_cast<std::size_t>(intensity_field), false);
+            any = any || cloud.intensities[i] != 0;
+        }
+        if (!any) cloud.intensities.clear();  // zero everywhere: a file written without intensity
+    }
     return cloud;
 }
 
 PointCloud parse_ply_points(std::string_view data, const std::string& name) {
     PointCloud cloud;
-    cloud.points = parse_ply(data, name, false).vertices;
+    auto content = parse_ply(data, name, false);
+    cloud.points = std::move(content.vertices);
+    if (content.intensity.size() == cloud.points.size()) cloud.intensities = std::move(content.intensity);
     return cloud;
 }
 
@@ -204,7 +220,7 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
     const std::uint64_t n = points ? *points : area;
     if (width && height && area != n) throw FormatError(name + ": PCD POINTS disagrees with WIDTH x HEIGHT");
 
-    int ix = -1, iy = -1, iz = -1;
+    int ix = -1, iy = -1, iz = -1, ii = -1;
     std::size_t record = 0, tokens_per_point = 0;
     std::vector<std::size_t> offset(fields.size()), token(fields.size());  // byte / ascii token position
     for (std::size_t i = 0; i < fields.size(); ++i) {
@@ -216,6 +232,10 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
         if (fields[i].name == "y") iy = static_cast<int>(i);
         if (fields[i].name == "z") iz = static_cast<int>(i);
     }
+    // The intensity: PCL's PointXYZI field, or the names the PLY reader takes too.
+    for (const char* want : {"intensity", "reflectivity", "reflectance", "remission"})
+        for (std::size_t i = 0; i < fields.size() && ii < 0; ++i)
+            if (fields[i].name == want) ii = static_cast<int>(i);
     if (ix < 0 || iy < 0 || iz < 0) throw FormatError(name + ": PCD has no x, y, z fields");
     const int idx[3] = {ix, iy, iz};
 
@@ -240,6 +260,7 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
             if (vals.size() != tokens_per_point) throw FormatError(name + ": PCD data line " + std::to_string(r + 1) + " has " + std::to_string(vals.size()) + " values, expected " + std::to_string(tokens_per_point));
             cloud.points.emplace_back(vals[token[static_cast<std::size_t>(ix)]], vals[token[static_cast<std::size_t>(iy)]],
                                       vals[token[static_cast<std::size_t>(iz)]]);
+            if (ii >= 0) cloud.intensities.push_back(to_float_or_nan(vals[token[static_cast<std::size_t>(ii)]]));
         }
     } else if (encoding == "binary") {
         if (record == 0 || n > rest.size() / record)
@@ -250,6 +271,11 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
                 const auto& f = fields[static_cast<std::size_t>(idx[a])];
                 cloud.points[r][a] = load_scalar(rest.data() + r * record + offset[static_cast<std::size_t>(idx[a])], f.scalar(), false);
             }
+        if (ii >= 0) {
+            const auto i = static_cast<std::size_t>(ii);
+            cloud.intensities.resize(n);
+            for (std::uint64_t r = 0; r < n; ++r) cloud.intensities[r] = to_float_or_nan(load_scalar(rest.data() + r * record + offset[i], fields[i].scalar(), false));
+        }
     } else if (encoding == "binary_compressed") {
         if (rest.size() < 8) throw FormatError(name + ": PCD binary_compressed data is truncated");
         const std::uint32_t csize = load<std::uint32_t>(rest.data(), false), usize = load<std::uint32_t>(rest.data() + 4, false);
@@ -274,6 +300,12 @@ PointCloud parse_pcd_points(std::string_view data, const std::string& name) {
                 const auto i = static_cast<std::size_t>(idx[a]);
                 cloud.points[r][a] = load_scalar(buf.data() + soa[i] + r * fields[i].size * fields[i].count, fields[i].scalar(), false);
             }
+        if (ii >= 0) {
+            const auto i = static_cast<std::size_t>(ii);
+            cloud.intensities.resize(n);
+            for (std::uint64_t r = 0; r < n; ++r)
+                cloud.intensities[r] = to_float_or_nan(load_scalar(buf.data() + soa[i] + r * fields[i].size * fields[i].count, fields[i].scalar(), false));
+        }
     } else {
         throw FormatError(name + ": unknown PCD DATA encoding '" + encoding + "'");
     }
@@ -372,12 +404,18 @@ PointCloud read_points(const std::filesystem::path& path, const PointReadOptions
     if (options.ring_field != -1 && fmt != PointFormat::KittiBin)
         throw InvalidArgument(name + ": a ring field is read from .bin scans only");
     const std::string data = read_file(name, options.max_bytes);
+    PointCloud cloud;
     switch (fmt) {
-        case PointFormat::KittiBin: return parse_kitti_bin(data, options.bin_fields, name, options.ring_field);
-        case PointFormat::Ply: return parse_ply_points(data, name);
-        case PointFormat::Pcd: return parse_pcd_points(data, name);
-        default: return parse_text_points(data, name);
+        case PointFormat::KittiBin:
+            cloud = parse_kitti_bin(data, options.bin_fields, name, options.ring_field,
+                                    options.intensity_field < options.bin_fields ? options.intensity_field : -1);
+            break;
+        case PointFormat::Ply: cloud = parse_ply_points(data, name); break;
+        case PointFormat::Pcd: cloud = parse_pcd_points(data, name); break;
+        default: cloud = parse_text_points(data, name);
     }
+    if (options.intensity_field < 0) cloud.intensities.clear();  // none asked for, whatever the format
+    return cloud;
 }
 
 }  // namespace lidarsurf

@@ -45,8 +45,10 @@ void write_points(const PointCloud& cloud, const std::filesystem::path& path) {
             out.write(reinterpret_cast<const char*>(rec), sizeof(rec));
         }
     } else {
-        for (const auto& p : cloud.points) {
-            const float rec[4] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), 0.0f};
+        const bool intensity = cloud.intensities.size() == cloud.points.size();
+        for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+            const Eigen::Vector3d& p = cloud.points[i];
+            const float rec[4] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()), intensity ? cloud.intensities[i] : 0.0f};
             out.write(reinterpret_cast<const char*>(rec), sizeof(rec));
         }
     }

@@ -495,6 +495,7 @@ void VelodyneSweeps::add_firing(const Firing& f) {
             const double vz = (d + dy) * sw + vo * cw;
             sweep_.cloud.points.emplace_back(vy, -vx, vz);
             sweep_.cloud.rings.push_back(ring_[laser]);
+            sweep_.cloud.intensities.push_back(static_cast<float>(block[4 + 3 * j + 2]));  // the channel's calibrated reflectivity byte
             point_time_.push_back(f.packet_ns + static_cast<std::int64_t>(t_us * 1000 + 0.5));  // t_us >= 0
         }
     }

@@ -8,6 +8,7 @@
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/stopwatch.hpp"
 #include "lidarsurf/mesh/marching_cubes.hpp"
+#include "lidarsurf/mesh/vertex_intensity.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 
 namespace lidarsurf {
@@ -98,6 +99,7 @@ MeshDelta LiveMesh::update(VoxelGrid& grid, const Eigen::Vector3d& sensor, const
                 if (const std::uint32_t i = position_of.find(BlockMap<std::int32_t>::block_of(cube)); i != BlockIndex::kAbsent) cubes[at[i]++] = cube;
         }
         std::vector<Mesh> meshes = extract_meshes(seeded.field, cubes, starts, placement);
+        for (Mesh& m : meshes) attach_intensity(m, grid, config_.max_reach());
         for (std::size_t i = 0; i < count; ++i) {
             const VoxelKey& key = core[i];
             changes_.mark_meshed(grid, key);
@@ -141,7 +143,7 @@ std::size_t LiveMesh::memory_bytes() const {
     for (const MeshBlock& b : blocks_) {
         const Mesh& m = b.mesh;
         bytes += m.vertices.capacity() * sizeof(Eigen::Vector3d) + m.triangles.capacity() * sizeof(m.triangles[0]) +
-                 m.normals.capacity() * sizeof(Eigen::Vector3f) + m.levels.capacity() + m.confidence.capacity() * sizeof(float);
+                 m.normals.capacity() * sizeof(Eigen::Vector3f) + m.levels.capacity() + (m.confidence.capacity() + m.intensity.capacity()) * sizeof(float);
     }
     return bytes;
 }
@@ -182,7 +184,7 @@ std::vector<MeshBlock> split_into_blocks(const Mesh& mesh, const Eigen::Vector3d
     std::vector<MeshBlock> blocks;
     std::vector<std::uint32_t> local(mesh.vertices.size()), stamp(mesh.vertices.size(), 0);
     const bool normals = mesh.normals.size() == mesh.vertices.size(), levels = mesh.levels.size() == mesh.vertices.size(),
-               confidence = mesh.confidence.size() == mesh.vertices.size();
+               confidence = mesh.confidence.size() == mesh.vertices.size(), intensity = mesh.intensity.size() == mesh.vertices.size();
     for (std::size_t begin = 0; begin < owner.size();) {
         std::size_t end = begin;
         while (end < owner.size() && same_key(owner[end].first, owner[begin].first)) ++end;
@@ -201,6 +203,7 @@ std::vector<MeshBlock> split_into_blocks(const Mesh& mesh, const Eigen::Vector3d
                     if (normals) m.normals.push_back(mesh.normals[v]);
                     if (levels) m.levels.push_back(mesh.levels[v]);
                     if (confidence) m.confidence.push_back(mesh.confidence[v]);
+                    if (intensity) m.intensity.push_back(mesh.intensity[v]);
                 }
                 tri[static_cast<std::size_t>(c)] = local[v];
             }

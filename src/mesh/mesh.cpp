@@ -20,6 +20,7 @@ void Mesh::check() const {
     attr(normals.size(), "normals");
     attr(levels.size(), "levels");
     attr(confidence.size(), "confidence");
+    attr(intensity.size(), "intensity");
     for (const auto& t : triangles)
         for (std::uint32_t i : t)
             if (i >= n) throw InvalidInput("mesh triangle refers to vertex " + std::to_string(i) + " of " + std::to_string(n));
@@ -37,6 +38,7 @@ void Mesh::append(const Mesh& part) {
     normals.insert(normals.end(), part.normals.begin(), part.normals.end());
     levels.insert(levels.end(), part.levels.begin(), part.levels.end());
     confidence.insert(confidence.end(), part.confidence.begin(), part.confidence.end());
+    intensity.insert(intensity.end(), part.intensity.begin(), part.intensity.end());
     for (const auto& t : part.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
 }
 
@@ -54,6 +56,7 @@ void Mesh::append(const Mesh& part, std::span<const std::int64_t> existing) {
         if (!part.normals.empty()) normals.push_back(part.normals[i]);
         if (!part.levels.empty()) levels.push_back(part.levels[i]);
         if (!part.confidence.empty()) confidence.push_back(part.confidence[i]);
+        if (!part.intensity.empty()) intensity.push_back(part.intensity[i]);
     }
     for (const auto& t : part.triangles) triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
 }
@@ -71,12 +74,14 @@ void Mesh::keep_triangles(std::vector<std::array<std::uint32_t, 3>> kept) {
         if (!normals.empty()) normals[next] = normals[v];
         if (!levels.empty()) levels[next] = levels[v];
         if (!confidence.empty()) confidence[next] = confidence[v];
+        if (!intensity.empty()) intensity[next] = intensity[v];
         ++next;
     }
     vertices.resize(next);
     if (!normals.empty()) normals.resize(next);
     if (!levels.empty()) levels.resize(next);
     if (!confidence.empty()) confidence.resize(next);
+    if (!intensity.empty()) intensity.resize(next);
     for (auto& t : kept)
         for (std::uint32_t& v : t) v = remap[v];
     triangles = std::move(kept);

@@ -76,13 +76,14 @@ double dist_cylinder(const Cylinder& c, const Eigen::Vector3d& p) {
 
 }  // namespace
 
-std::optional<double> AnalyticScene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const {
+std::optional<RayReturn> AnalyticScene::first_return(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                                     double max_range) const {
     double best = kInf;
     for (const auto& g : grounds) best = std::min(best, hit_ground(g, o, d));
     for (const auto& b : boxes) best = std::min(best, hit_box(b, o, d));
     for (const auto& c : cylinders) best = std::min(best, hit_cylinder(c, o, d));
     if (best > max_range) return std::nullopt;
-    return best;
+    return RayReturn{best};
 }
 
 double AnalyticScene::distance(const Eigen::Vector3d& p) const {

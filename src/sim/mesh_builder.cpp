@@ -33,8 +33,16 @@ std::vector<Eigen::Vector3d> circle(const Eigen::Vector3d& axis, double radius, 
 
 }  // namespace
 
+void MeshBuilder::set_reflectivity(float reflectivity) {
+    if (!(reflectivity >= 0 && reflectivity <= 1)) throw InvalidArgument("reflectivity must be in [0, 1]");
+    if (!reflective_) mesh_.intensity.assign(mesh_.vertices.size(), kDefaultReflectivity);
+    reflective_ = true;
+    reflectivity_ = reflectivity;
+}
+
 std::uint32_t MeshBuilder::vertex(const Eigen::Vector3d& p) {
     mesh_.vertices.push_back(p);
+    if (reflective_) mesh_.intensity.push_back(reflectivity_);
     return static_cast<std::uint32_t>(mesh_.vertices.size() - 1);
 }
 
@@ -135,7 +143,12 @@ void MeshBuilder::height_field(double x0, double x1, double y0, double y1, doubl
 
 void MeshBuilder::append(const Mesh& other) {
     const auto offset = static_cast<std::uint32_t>(mesh_.vertices.size());
+    if (!reflective_ && !other.intensity.empty()) set_reflectivity(reflectivity_);
     mesh_.vertices.insert(mesh_.vertices.end(), other.vertices.begin(), other.vertices.end());
+    if (reflective_) {
+        if (other.intensity.size() == other.vertices.size()) mesh_.intensity.insert(mesh_.intensity.end(), other.intensity.begin(), other.intensity.end());
+        else mesh_.intensity.resize(mesh_.vertices.size(), reflectivity_);
+    }
     for (const auto& t : other.triangles) mesh_.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
 }
 

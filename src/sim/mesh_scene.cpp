@@ -14,6 +14,7 @@ struct MeshScene::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     std::vector<Eigen::Vector3d> normals;  // per triangle
+    std::vector<float> reflectivity;       // per triangle; empty when the mesh has no intensity
 
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
@@ -42,11 +43,13 @@ MeshScene::MeshScene(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
         for (int a = 0; a < 3; ++a) v[3 * i + a] = static_cast<float>(mesh.vertices[i][a]);
     impl_->normals.reserve(mesh.triangles.size());
+    if (!mesh.intensity.empty()) impl_->reflectivity.reserve(mesh.triangles.size());
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
         const auto& tri = mesh.triangles[i];
         for (int a = 0; a < 3; ++a) t[3 * i + a] = tri[a];
         const Eigen::Vector3d n = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]]).cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
         impl_->normals.push_back(n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ());
+        if (!mesh.intensity.empty()) impl_->reflectivity.push_back(mesh.intensity[tri[0]]);
     }
     rtcCommitGeometry(geom);
     rtcAttachGeometry(impl_->scene, geom);
@@ -79,13 +82,15 @@ std::optional<RayHit> MeshScene::cast(const Eigen::Vector3d& o, const Eigen::Vec
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || !(rh.ray.tfar > 0)) return std::nullopt;
-    return RayHit{rh.ray.tfar, rh.hit.primID, impl_->normals[rh.hit.primID]};
+    RayHit hit{rh.ray.tfar, rh.hit.primID, impl_->normals[rh.hit.primID]};
+    if (!impl_->reflectivity.empty()) hit.reflectivity = impl_->reflectivity[rh.hit.primID];
+    return hit;
 }
 
-std::optional<double> MeshScene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const {
+std::optional<RayReturn> MeshScene::first_return(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const {
     const auto hit = cast(o, d, max_range);
     if (!hit) return std::nullopt;
-    return hit->range;
+    return RayReturn{hit->range, hit->reflectivity};
 }
 
 bool MeshScene::occluded(const Eigen::Vector3d& from, const Eigen::Vector3d& to) const {

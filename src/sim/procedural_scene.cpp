@@ -1,5 +1,6 @@
 #include "lidarsurf/sim/procedural_scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -46,6 +47,8 @@ CarParts car_parts(Rng& rng) {
     const double len = van ? rng.uniform(4.8, 5.4) : rng.uniform(3.9, 4.7);
     const double wid = rng.uniform(1.7, 1.9), wheel_r = van ? 0.36 : 0.32;
     const double hull_top = van ? 1.1 : rng.uniform(0.95, 1.05);
+    hull.set_reflectivity(Material::kCarPaint);
+    b.set_reflectivity(Material::kCarPaint);
     hull.box_between({-len / 2, -wid / 2, 0.3}, {len / 2, wid / 2, hull_top});    // hull
     if (van) {
         b.box_between({-len / 2, -wid / 2 + 0.05, hull_top}, {len / 2 - 0.9, wid / 2 - 0.05, 2.1});  // box body
@@ -54,6 +57,7 @@ CarParts car_parts(Rng& rng) {
         b.box_between({back - cab / 2, -wid / 2 + 0.1, hull_top}, {back + cab / 2, wid / 2 - 0.1, hull_top + rng.uniform(0.4, 0.5)});
     }
     const double ax = len / 2 - 0.85;
+    b.set_reflectivity(Material::kRubber);
     for (double x : {-ax, ax})
         for (double s : {-1.0, 1.0})
             b.cylinder({x, s * (wid / 2 - 0.22), wheel_r}, {x, s * (wid / 2 + 0.0), wheel_r}, wheel_r, 14);
@@ -70,6 +74,7 @@ Mesh car_body(Rng& rng) {
 /// A pedestrian in its own frame (x forward, feet at z = 0): legs, torso, arms and head, 1.6-1.9 m.
 Mesh pedestrian_body(Rng& rng) {
     MeshBuilder b;
+    b.set_reflectivity(Material::kClothing);
     const double h = rng.uniform(1.6, 1.9), hip = 0.5 * h, shoulder = 0.82 * h;
     for (double s : {-1.0, 1.0}) {
         b.box_between({-0.08, s * 0.11 - 0.07, 0.0}, {0.08, s * 0.11 + 0.07, hip});                   // leg
@@ -84,9 +89,12 @@ Mesh pedestrian_body(Rng& rng) {
 Mesh cyclist_body(Rng& rng) {
     MeshBuilder b;
     const double r = 0.34, base = 1.05;
+    b.set_reflectivity(Material::kRubber);
     for (double x : {-base / 2, base / 2}) b.cylinder({x, -0.02, r}, {x, 0.02, r}, r, 16);               // wheels
+    b.set_reflectivity(Material::kMetal);
     b.box_between({-base / 2, -0.03, r}, {base / 2, 0.03, r + 0.35});                                   // frame
     const double h = rng.uniform(1.6, 1.85);
+    b.set_reflectivity(Material::kClothing);
     b.box_between({-0.25, -0.18, r + 0.45}, {0.05, 0.18, r + 0.5 + 0.35 * h});                          // rider's torso
     b.box_between({-0.05, -0.08, r + 0.52 + 0.35 * h}, {0.13, 0.08, r + 0.7 + 0.35 * h});             // head
     for (double s : {-1.0, 1.0}) b.box_between({-0.15, s * 0.12 - 0.05, r}, {0.05, s * 0.12 + 0.05, r + 0.5});  // legs
@@ -107,6 +115,7 @@ void building(MeshBuilder& b, Rng& rng, double x0, double x1, double side) {
     const double floor_h = rng.uniform(2.9, 3.4), height = floors * floor_h + rng.uniform(0.3, 1.5);
     const double recess = rng.uniform(0.2, 0.35), z0 = kCurb;
     auto y_at = [&](double d) { return side * (front + d); };  // d = depth behind the facade line
+    b.set_reflectivity(Material::kFacade);
     auto slab = [&](double xa, double xb, double da, double db, double za, double zb) {
         b.box_between({xa, std::min(y_at(da), y_at(db)), za}, {xb, std::max(y_at(da), y_at(db)), zb});
     };
@@ -128,7 +137,9 @@ void building(MeshBuilder& b, Rng& rng, double x0, double x1, double side) {
                 const double xa = x0 + i * bay + 0.4, xb = x0 + (i + 1) * bay - 0.4, z = z0 + f * floor_h;
                 if (xb - xa < 1.0) continue;
                 slab(xa, xb, -1.1, 0.0, z - 0.05, z + 0.12);                               // slab
+                b.set_reflectivity(Material::kMetal);
                 slab(xa, xb, -1.1, -1.05, z + 0.12, z + 1.05);                             // railing plate
+                b.set_reflectivity(Material::kFacade);
             }
     }
     if (rng.chance(0.3)) slab(x0 + 0.5, x1 - 0.5, -1.6, 0.0, z0 + 2.6, z0 + 2.75);     // shop awning
@@ -138,10 +149,12 @@ void wall_or_fence(MeshBuilder& b, Rng& rng, double x0, double x1, double side) 
     const double y = side * (kSidewalkOuter + 0.3);
     if (rng.chance(0.5)) {
         const double h = rng.uniform(1.2, 2.2);
+        b.set_reflectivity(Material::kConcrete);
         b.box_between({x0, std::min(y, y + side * 0.25), kCurb}, {x1, std::max(y, y + side * 0.25), kCurb + h});
         return;
     }
     const double h = rng.uniform(1.2, 1.8);
+    b.set_reflectivity(Material::kMetal);
     for (double x = x0; x <= x1 + 1e-9; x += 2.0) b.box_between({x - 0.04, y - 0.04, kCurb}, {x + 0.04, y + 0.04, kCurb + h});
     for (double z : {0.35, h - 0.15}) b.box_between({x0, y - 0.02, kCurb + z}, {x1, y + 0.02, kCurb + z + 0.1});
 }
@@ -149,7 +162,9 @@ void wall_or_fence(MeshBuilder& b, Rng& rng, double x0, double x1, double side) 
 void tree(MeshBuilder& b, Rng& rng, const V& ground, bool conifer) {
     const double trunk_h = rng.uniform(2.2, 3.6), trunk_r = rng.uniform(0.12, 0.25);
     const V top = ground + V(0, 0, trunk_h);
+    b.set_reflectivity(Material::kBark);
     b.cylinder(ground, top, trunk_r, 10);
+    b.set_reflectivity(Material::kFoliage);
     if (conifer) {
         const double r = rng.uniform(1.2, 2.2), h = rng.uniform(4.0, 7.0);
         b.cone(top - V(0, 0, 0.8), top + V(0, 0, h), r, 12);
@@ -161,6 +176,7 @@ void tree(MeshBuilder& b, Rng& rng, const V& ground, bool conifer) {
 
 void lamppost(MeshBuilder& b, const V& ground, double toward_road) {
     const V top = ground + V(0, 0, 7.0);
+    b.set_reflectivity(Material::kMetal);
     b.cylinder(ground, top, 0.09, 10);
     const V tip = top + V(0, toward_road * 1.8, 0);
     b.cylinder(top - V(0, 0, 0.05), tip - V(0, 0, 0.05), 0.05, 8);
@@ -169,10 +185,39 @@ void lamppost(MeshBuilder& b, const V& ground, double toward_road) {
 
 void traffic_sign(MeshBuilder& b, Rng& rng, const V& ground) {
     const double h = rng.uniform(2.0, 2.6);
+    b.set_reflectivity(Material::kMetal);
     b.cylinder(ground, ground + V(0, 0, h), 0.04, 8);
     const V c = ground + V(0, 0, h + 0.35);
+    b.set_reflectivity(Material::kSignFace);
     if (rng.chance(0.5)) b.box(c, {0.015, 0.3, 0.3});                                  // square plate facing x
     else b.cylinder(c - V(0.015, 0, 0), c + V(0.015, 0, 0), 0.32, 16);                 // round plate
+}
+
+/// The carriageway |y| <= kRoadHalf as flat cells of asphalt and paint: the cells are cut at the
+/// markings' edges (and every 5 m), so each is one material.
+void carriageway(MeshBuilder& b, double length) {
+    const double half = length / 2;
+    const std::vector<Marking> marks = town_markings(length);
+    std::vector<double> xs, ys = {-kRoadHalf, kRoadHalf};
+    for (double x = -half; x < half; x += 5.0) xs.push_back(x);
+    xs.push_back(half);
+    for (const Marking& m : marks) {
+        xs.insert(xs.end(), {m.x0, m.x1});
+        ys.insert(ys.end(), {m.y0, m.y1});
+    }
+    for (auto* cuts : {&xs, &ys}) {
+        std::sort(cuts->begin(), cuts->end());
+        cuts->erase(std::unique(cuts->begin(), cuts->end(), [](double a, double c) { return c - a < 1e-9; }), cuts->end());
+    }
+    auto flat = [](double, double) { return 0.0; };
+    for (std::size_t j = 0; j + 1 < ys.size(); ++j)
+        for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
+            const double cx = 0.5 * (xs[i] + xs[i + 1]), cy = 0.5 * (ys[j] + ys[j + 1]);
+            bool paint = false;
+            for (const Marking& m : marks) paint = paint || (cx > m.x0 && cx < m.x1 && cy > m.y0 && cy < m.y1);
+            b.set_reflectivity(paint ? Material::kRoadPaint : Material::kAsphalt);
+            b.height_field(xs[i], xs[i + 1], ys[j], ys[j + 1], std::max(xs[i + 1] - xs[i], ys[j + 1] - ys[j]), flat);
+        }
 }
 
 void make_town(World& w, Rng& rng) {
@@ -181,7 +226,8 @@ void make_town(World& w, Rng& rng) {
     const double half = w.config.length / 2;
     const double cross[2] = {-w.config.length / 4, w.config.length / 4};
     auto flat = [](double, double) { return 0.0; };
-    b.height_field(-half, half, -kRoadHalf, kRoadHalf, 5.0, flat);                        // carriageway
+    carriageway(b, w.config.length);
+    b.set_reflectivity(Material::kAsphalt);
     for (double cx : cross) b.height_field(cx - kCrossHalf, cx + kCrossHalf, -kLotBack, -kRoadHalf, 5.0, flat);
     for (double cx : cross) b.height_field(cx - kCrossHalf, cx + kCrossHalf, kRoadHalf, kLotBack, 5.0, flat);
     // Blocks between the cross streets, each side: a kerbed plateau with lots on it.
@@ -189,6 +235,7 @@ void make_town(World& w, Rng& rng) {
                                                      {cross[1] + kCrossHalf, half}};
     for (double side : {-1.0, 1.0}) {
         for (const auto& [bx0, bx1] : blocks) {
+            b.set_reflectivity(Material::kConcrete);
             b.box_between({bx0, side > 0 ? kRoadHalf : -kLotBack, 0.0}, {bx1, side > 0 ? kLotBack : -kRoadHalf, kCurb});
             double x = bx0 + rng.uniform(0.0, 2.0);
             while (x < bx1 - 6.0) {
@@ -321,6 +368,7 @@ void make_offroad(World& w, Rng& rng) {
     Terrain t;
     for (double& p : t.phase) p = rng.uniform(0, 2 * std::numbers::pi);
     for (int i = 0; i < 10; ++i) t.hills.push_back({rng.uniform(-half, half), rng.uniform(-wide, wide), rng.uniform(-2.5, 3.5)});
+    b.set_reflectivity(Material::kSoil);
     b.height_field(-half, half, -wide, wide, 0.6, [&](double x, double y) { return t.height(x, y); });
     auto off_track = [&](double x, double y, double clear) { return std::fabs(y - t.track(x)) > clear; };
     auto on_ground = [&](double x, double y) { return V(x, y, t.height(x, y)); };
@@ -335,16 +383,19 @@ void make_offroad(World& w, Rng& rng) {
         const double x = rng.uniform(-half + 2, half - 2), y = rng.uniform(-wide + 2, wide - 2);
         if (!off_track(x, y, 3.5)) continue;
         const double r = rng.uniform(0.3, 1.2);
+        b.set_reflectivity(Material::kRock);
         b.ellipsoid(on_ground(x, y), {r * rng.uniform(0.8, 1.5), r * rng.uniform(0.8, 1.5), r * rng.uniform(0.5, 0.9)}, 6);
     }
     for (int i = 0; i < n_bushes; ++i) {
         const double x = rng.uniform(-half + 2, half - 2), y = rng.uniform(-wide + 2, wide - 2);
         if (!off_track(x, y, 3.0)) continue;
         const double r = rng.uniform(0.4, 0.9);
+        b.set_reflectivity(Material::kFoliage);
         b.ellipsoid(on_ground(x, y) + V(0, 0, 0.3 * r), {r, r * rng.uniform(0.8, 1.2), 0.7 * r}, 6);
     }
     // A fence line beside part of the track, following the ground.
     const double fx0 = rng.uniform(-half + 10, -10), fx1 = fx0 + rng.uniform(40, 70), off = rng.chance(0.5) ? 6.0 : -6.0;
+    b.set_reflectivity(Material::kMetal);
     for (double x = fx0; x <= fx1; x += 2.5) {
         const V g = on_ground(x, t.track(x) + off);
         b.box_between(g + V(-0.05, -0.05, -0.2), g + V(0.05, 0.05, 1.3));
@@ -359,6 +410,25 @@ void make_offroad(World& w, Rng& rng) {
 }
 
 }  // namespace
+
+std::vector<Marking> town_markings(double length) {
+    const double half = length / 2;
+    const double cross[2] = {-length / 4, length / 4};
+    std::vector<Marking> marks;
+    // Between the cross streets (and before the zebras): edge lines, the dashed centre line.
+    const std::pair<double, double> spans[3] = {{-half, cross[0] - kCrossHalf}, {cross[0] + kCrossHalf, cross[1] - kCrossHalf},
+                                                {cross[1] + kCrossHalf, half}};
+    for (const auto& [x0, x1] : spans) {
+        for (double side : {-1.0, 1.0}) marks.push_back({x0, x1, side > 0 ? 4.7 : -4.85, side > 0 ? 4.85 : -4.7});
+        const double end = x1 - (x1 < half ? 5.0 : 0.0);  // clear of the zebra before the next cross street
+        for (double x = x0 + 1.0; x + 3.0 <= end; x += 9.0) marks.push_back({x, x + 3.0, -0.075, 0.075});
+    }
+    for (double cx : cross) {
+        const double x0 = cx - kCrossHalf - 4.0;
+        for (int i = 0; i < 8; ++i) marks.push_back({x0, x0 + 3.0, -4.5 + i * 1.2, -3.9 + i * 1.2});
+    }
+    return marks;
+}
 
 SceneKind parse_scene_kind(std::string_view name) {
     if (name == "town") return SceneKind::Town;

@@ -1,5 +1,6 @@
 #include "lidarsurf/sim/sensor_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -37,6 +38,7 @@ void SensorModel::validate() const {
     if (!(min_range >= 0 && max_range > min_range && std::isfinite(max_range)))
         throw InvalidArgument("sensor '" + name + "': ranges must satisfy 0 <= min_range < max_range");
     if (!(range_noise >= 0 && range_noise < 10)) throw InvalidArgument("sensor '" + name + "': range noise must be in [0, 10) m");
+    if (!(intensity_noise >= 0 && intensity_noise <= 1)) throw InvalidArgument("sensor '" + name + "': intensity noise must be in [0, 1]");
     if (!(dropout >= 0 && dropout < 1)) throw InvalidArgument("sensor '" + name + "': dropout must be in [0, 1)");
     if (!(std::fabs(mount_height) < 100)) throw InvalidArgument("sensor '" + name + "': mount height must be finite, |h| < 100 m");
 }
@@ -100,6 +102,7 @@ SensorModel SensorModel::ground_truth_for(const SensorModel& sensor, int beams) 
     s.elevations_deg = even_beams(beams, top, bottom);
     s.azimuth_step_deg = std::min(0.09, sensor.azimuth_step_deg / 2);
     s.range_noise = 0.0;
+    s.intensity_noise = 0.0;
     s.dropout = 0.0;
     return s;
 }
@@ -135,6 +138,7 @@ SensorModel SensorModel::from_json(std::string_view text) {
             else if (key == "min_range") s.min_range = value.get<double>();
             else if (key == "max_range") s.max_range = value.get<double>();
             else if (key == "range_noise") s.range_noise = value.get<double>();
+            else if (key == "intensity_noise") s.intensity_noise = value.get<double>();
             else if (key == "dropout") s.dropout = value.get<double>();
             else if (key == "mount_height") s.mount_height = value.get<double>();
             else if (key != "beams" && key != "elevation_max_deg" && key != "elevation_min_deg")
@@ -165,6 +169,7 @@ std::string SensorModel::to_json() const {
                         {"min_range", min_range},
                         {"max_range", max_range},
                         {"range_noise", range_noise},
+                        {"intensity_noise", intensity_noise},
                         {"dropout", dropout},
                         {"mount_height", mount_height}};
     return j.dump(2) + "\n";
@@ -185,6 +190,7 @@ PointCloud simulate_sweep(const RayScene& scene, const SensorModel& sensor, cons
     const std::size_t beams = sensor.elevations_deg.size();
     const double deg = std::numbers::pi / 180.0;
     std::vector<Eigen::Vector3d> hits(steps * beams);
+    std::vector<float> reflect(steps * beams, 0.0f);
     std::vector<std::uint8_t> valid(steps * beams, 0);
     const std::uint64_t key = splitmix64(seed);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, steps, 16), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -197,27 +203,34 @@ PointCloud simulate_sweep(const RayScene& scene, const SensorModel& sensor, cons
                 const std::size_t ray = a * beams + b;
                 const double el = sensor.elevations_deg[b] * deg;
                 const Eigen::Vector3d local(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-                const auto range = scene.intersect(origin, rot * local, sensor.max_range);
-                if (!range || *range < sensor.min_range) continue;
+                const auto hit = scene.first_return(origin, rot * local, sensor.max_range);
+                if (!hit || hit->range < sensor.min_range) continue;
                 const std::uint64_t r0 = splitmix64(key ^ (2 * ray)), r1 = splitmix64(key ^ (2 * ray + 1));
                 if (sensor.dropout > 0 && unit_interval(splitmix64(r0 ^ r1)) < sensor.dropout) continue;
-                double noisy = *range;
-                if (sensor.range_noise > 0) {  // Box-Muller
-                    const double u1 = 1.0 - unit_interval(r0), u2 = unit_interval(r1);
-                    noisy += sensor.range_noise * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
-                }
+                double noisy = hit->range;
+                const double u1 = 1.0 - unit_interval(r0), u2 = unit_interval(r1);
+                const double radius = std::sqrt(-2.0 * std::log(u1));  // Box-Muller: two independent unit normals
+                if (sensor.range_noise > 0) noisy += sensor.range_noise * radius * std::cos(2 * std::numbers::pi * u2);
+                double reflectivity = hit->reflectivity;
+                if (std::isfinite(reflectivity))
+                    reflectivity = std::clamp(reflectivity + sensor.intensity_noise * radius * std::sin(2 * std::numbers::pi * u2), 0.0, 1.0);
                 hits[ray] = noisy * local;
+                reflect[ray] = static_cast<float>(reflectivity);
                 valid[ray] = 1;
             }
         }
     });
     PointCloud cloud;
     if (point_steps) point_steps->clear();
+    bool known = true;  // the scene's reflectivity at every hit
     for (std::size_t i = 0; i < hits.size(); ++i) {
         if (!valid[i]) continue;
         cloud.points.push_back(hits[i]);
+        cloud.intensities.push_back(reflect[i]);
+        known = known && std::isfinite(reflect[i]);
         if (point_steps) point_steps->push_back(static_cast<std::uint32_t>(i / beams));
     }
+    if (!known || cloud.points.empty()) cloud.intensities.clear();
     return cloud;
 }
 

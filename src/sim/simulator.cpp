@@ -12,11 +12,11 @@ namespace {
 class UnionScene final : public RayScene {
 public:
     UnionScene(const RayScene& a, const RayScene* b) : a_(a), b_(b) {}
-    std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const override {
-        auto ha = a_.intersect(o, d, max_range);
+    std::optional<RayReturn> first_return(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const override {
+        auto ha = a_.first_return(o, d, max_range);
         if (!b_) return ha;
-        auto hb = b_->intersect(o, d, ha ? *ha : max_range);
-        if (hb && (!ha || *hb < *ha)) return hb;
+        auto hb = b_->first_return(o, d, ha ? ha->range : max_range);
+        if (hb && (!ha || hb->range < ha->range)) return hb;
         return ha;
     }
 
@@ -29,10 +29,11 @@ private:
 class AbsorbingScene final : public RayScene {
 public:
     AbsorbingScene(const RayScene& lit, const RayScene* dark) : lit_(lit), dark_(dark) {}
-    std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const override {
-        auto hit = lit_.intersect(o, d, max_range);
+    std::optional<RayReturn> first_return(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range) const override {
+        auto hit = lit_.first_return(o, d, max_range);
         if (!dark_) return hit;
-        if (auto absorbed = dark_->intersect(o, d, hit ? *hit : max_range); absorbed && (!hit || *absorbed < *hit)) return std::nullopt;
+        if (auto absorbed = dark_->intersect(o, d, hit ? hit->range : max_range); absorbed && (!hit || *absorbed < hit->range))
+            return std::nullopt;
         return hit;
     }
 

@@ -122,11 +122,10 @@ std::size_t TilePlan::scans_of(const TileKey& t) const {
 
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
                ReconstructionSummary* summary) {
-    return fuse_tile(plan, tile, [&](std::size_t i, std::vector<Eigen::Vector3f>&) { return scan(i); }, summary);
+    return fuse_tile(plan, tile, [&](std::size_t i, std::vector<Eigen::Vector3f>&) { return PointCloud{scan(i)}; }, summary);
 }
 
-Mesh fuse_tile(const TilePlan& plan, const TileKey& tile,
-               const std::function<std::vector<Eigen::Vector3d>(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<PointCloud(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
                ReconstructionSummary* summary) {
     Reconstructor rec(plan.config(), plan.sensor(), plan.grid_origin());
     const Eigen::AlignedBox3d crop = plan.crop(tile);
@@ -137,8 +136,8 @@ Mesh fuse_tile(const TilePlan& plan, const TileKey& tile,
             continue;
         }
         no_return.clear();
-        const std::vector<Eigen::Vector3d> points = scan(i, no_return);
-        rec.integrate(points, plan.viewpoint(i), crop, no_return);
+        const PointCloud cloud = scan(i, no_return);
+        rec.integrate(cloud.points, plan.viewpoint(i), crop, no_return, cloud.intensities);
     }
     Mesh mesh = mesh_tile(rec, plan, tile);
     if (summary) *summary = rec.summary();
@@ -202,6 +201,7 @@ std::vector<std::int64_t> SeamWelder::weld(const TileKey& tile, const Mesh& part
             for (int a = 0; a < 3; ++a) key.attributes[static_cast<std::size_t>(a)] = std::bit_cast<std::uint32_t>(part.normals[i][a]);
         if (!part.confidence.empty()) key.attributes[3] = std::bit_cast<std::uint32_t>(part.confidence[i]);
         if (!part.levels.empty()) key.attributes[4] = part.levels[i];
+        if (!part.intensity.empty()) key.attributes[5] = std::bit_cast<std::uint32_t>(part.intensity[i]);
         const auto [it, added] = seam_.try_emplace(key, written);
         if (added) ++written;
         else out[i] = static_cast<std::int64_t>(it->second);

@@ -13,8 +13,10 @@ namespace lidarsurf::live_stream {
 namespace {
 
 constexpr char kMagic[4] = {'L', 'S', 'L', 'V'};
-constexpr std::size_t kBlockHeaderBytes = 48;
-constexpr std::size_t kVertexRecordBytes = 12;  // x, y, z, confidence (uint16 each), level (uint8), 3 zero bytes
+constexpr std::size_t kBlockHeaderBytes = 56;
+// x, y, z, confidence (uint16 each), level (uint8), a zero byte, intensity (uint16)
+constexpr std::size_t kVertexRecordBytes = 12;
+constexpr std::uint16_t kNoIntensity = 65535;  // a vertex no return reached (NaN)
 constexpr std::size_t kMaxBlockVertices = 65535, kMaxBlockTriangles = 131072;
 // The finest position step: vertices within a quarter of a millimetre of the mesh's.
 constexpr double kPositionStep = 0.5e-3;
@@ -96,14 +98,19 @@ std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin) 
         if (order_of[v] != ~0u) vertex[order_of[v]] = static_cast<std::uint32_t>(v);
 
     // Positions: 16 bits an axis over the block's extent, from its lowest corner (relative to the
-    // origin); confidence: 16 bits over [0, the block's largest].
+    // origin); confidence: 16 bits over [0, the block's largest]; intensity: 65,535 steps over
+    // [the block's least, its largest] (the last code: none).
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-    float cmax = 0;
-    const bool confidence = m.confidence.size() == nv, levels = m.levels.size() == nv;
+    float cmax = 0, ilo = INFINITY, ihi = -INFINITY;
+    const bool confidence = m.confidence.size() == nv, levels = m.levels.size() == nv, intensity = m.intensity.size() == nv;
     for (const std::uint32_t v : vertex) {
         lo = lo.cwiseMin(m.vertices[v] - origin), hi = hi.cwiseMax(m.vertices[v] - origin);
         if (confidence && std::isfinite(m.confidence[v])) cmax = std::max(cmax, m.confidence[v]);
+        if (intensity && std::isfinite(m.intensity[v])) ilo = std::min(ilo, m.intensity[v]), ihi = std::max(ihi, m.intensity[v]);
     }
+    if (!(ilo <= ihi)) ilo = ihi = 0;  // none finite
+    const float ibase = intensity ? ilo : 0.0f;
+    const float istep = intensity ? static_cast<float>((static_cast<double>(ihi) - ilo) / 65534.0) : -1.0f;  // -1: the block has none
     const Eigen::Vector3f base = kept ? Eigen::Vector3f(lo.cast<float>()) : Eigen::Vector3f::Zero();
     const float step = kept ? std::max(static_cast<float>((hi - lo).maxCoeff() / 65535.0), static_cast<float>(kPositionStep)) : 1.0f;
     const float cstep = cmax / 65535.0f;
@@ -117,6 +124,13 @@ std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin) 
         q[3] = confidence && cstep > 0 && std::isfinite(m.confidence[v]) ? quantized(std::max(0.0f, m.confidence[v]) / cstep) : 0;
         std::memcpy(r, q, sizeof q);
         r[8] = levels ? m.levels[v] : 0;
+        if (intensity) {
+            const float value = m.intensity[v];
+            const std::uint16_t code = !std::isfinite(value) ? kNoIntensity
+                                       : istep > 0             ? static_cast<std::uint16_t>(std::min(65534L, std::lround((value - ibase) / istep)))
+                                                               : 0;
+            std::memcpy(r + 10, &code, sizeof code);
+        }
     }
     std::vector<unsigned char> vertex_code(meshopt_encodeVertexBufferBound(kept, kVertexRecordBytes));
     vertex_code.resize(meshopt_encodeVertexBuffer(vertex_code.data(), vertex_code.size(), records.data(), kept, kVertexRecordBytes));
@@ -131,6 +145,8 @@ std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin) 
     for (int a = 0; a < 3; ++a) put<float>(out, base[a]);
     put<float>(out, step);
     put<float>(out, cstep);
+    put<float>(out, ibase);
+    put<float>(out, istep);
     put<std::uint32_t>(out, static_cast<std::uint32_t>(vertex_code.size()));
     put<std::uint32_t>(out, static_cast<std::uint32_t>(index_code.size()));
     out.append(reinterpret_cast<const char*>(vertex_code.data()), vertex_code.size()).append(padded4(vertex_code.size()) - vertex_code.size(), '\0');
@@ -203,8 +219,9 @@ Message decode(std::span<const std::uint8_t> bytes) {
         if (nv > kMaxBlockVertices || nt > kMaxBlockTriangles) Reader::fail("a block larger than a block can be");
         Eigen::Vector3f base;
         for (int a = 0; a < 3; ++a) base[a] = in.get<float>();
-        const float step = in.get<float>(), cstep = in.get<float>();
-        if (!base.allFinite() || !std::isfinite(step) || !std::isfinite(cstep)) Reader::fail("a block's corner or steps are not finite");
+        const float step = in.get<float>(), cstep = in.get<float>(), ibase = in.get<float>(), istep = in.get<float>();
+        if (!base.allFinite() || !std::isfinite(step) || !std::isfinite(cstep) || !std::isfinite(ibase) || !std::isfinite(istep))
+            Reader::fail("a block's corner or steps are not finite");
         const auto vertex_bytes = in.get<std::uint32_t>(), index_bytes = in.get<std::uint32_t>();
         const std::span<const std::uint8_t> vertex_code = in.take(vertex_bytes);
         in.skip(padded4(vertex_bytes) - vertex_bytes);
@@ -218,12 +235,18 @@ Message decode(std::span<const std::uint8_t> bytes) {
             Reader::fail("a block's triangles do not decode");
         Mesh& mesh = block.mesh;
         mesh.vertices.resize(nv), mesh.confidence.resize(nv), mesh.levels.resize(nv);
+        if (istep >= 0) mesh.intensity.resize(nv);
         for (std::size_t i = 0; i < nv; ++i) {
             std::uint16_t q[4];
             std::memcpy(q, records.data() + kVertexRecordBytes * i, sizeof q);
             for (int a = 0; a < 3; ++a) mesh.vertices[i][a] = m.header.origin[a] + static_cast<double>(base[a]) + static_cast<double>(q[a]) * step;
             mesh.confidence[i] = static_cast<float>(q[3] * static_cast<double>(cstep));
             mesh.levels[i] = records[kVertexRecordBytes * i + 8];
+            if (istep >= 0) {
+                std::uint16_t code;
+                std::memcpy(&code, records.data() + kVertexRecordBytes * i + 10, sizeof code);
+                mesh.intensity[i] = code == kNoIntensity ? NAN : static_cast<float>(ibase + code * static_cast<double>(istep));
+            }
         }
         mesh.triangles.resize(nt);
         for (std::size_t i = 0; i < nt; ++i)

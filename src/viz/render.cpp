@@ -33,7 +33,8 @@ Colouring parse_colouring(std::string_view name) {
     if (name == "height") return Colouring::Height;
     if (name == "level") return Colouring::Level;
     if (name == "grey" || name == "gray") return Colouring::Grey;
-    throw InvalidArgument("unknown colouring '" + std::string(name) + "' (height, level, grey)");
+    if (name == "intensity") return Colouring::Intensity;
+    throw InvalidArgument("unknown colouring '" + std::string(name) + "' (height, level, intensity, grey)");
 }
 
 void RenderConfig::validate() const {
@@ -53,6 +54,8 @@ Image render(const Mesh& mesh, const RenderConfig& config) {
     if (mesh.triangles.empty()) throw InvalidInput("nothing to render: the mesh has no triangle");
     if (config.colouring == Colouring::Level && mesh.levels.size() != mesh.vertices.size())
         throw InvalidInput("colouring by level needs the per-vertex levels k' (a mesh written by lidarsurf reconstruct)");
+    if (config.colouring == Colouring::Intensity && mesh.intensity.size() != mesh.vertices.size())
+        throw InvalidInput("colouring by intensity needs the per-vertex intensity (a mesh made from points that had one)");
     const sim::MeshScene scene(mesh);
 
     // Robust framing: median vertex as the target, the 80th percentile horizontal spread as scale.
@@ -69,6 +72,14 @@ Image render(const Mesh& mesh, const RenderConfig& config) {
     const double r = std::max(1.0, quantile(spread, 0.6));
     const Eigen::Vector3d eye = config.eye.value_or(target + r * Eigen::Vector3d(-0.9, -0.75, 0.75));
     const double z_lo = quantile(zs, 0.02), z_hi = std::max(z_lo + 1e-6, quantile(zs, 0.98));
+    // Intensity: a grey ramp over the 2nd-98th percentiles of the vertices' finite values.
+    double i_lo = 0, i_hi = 1;
+    if (config.colouring == Colouring::Intensity) {
+        std::vector<double> values;
+        for (float v : mesh.intensity)
+            if (std::isfinite(v)) values.push_back(v);
+        if (!values.empty()) i_lo = quantile(values, 0.02), i_hi = std::max(i_lo + 1e-6, quantile(values, 0.98));
+    }
 
     const Eigen::Vector3d fwd = (target - eye).normalized();
     Eigen::Vector3d right = fwd.cross(Eigen::Vector3d::UnitZ());
@@ -97,6 +108,14 @@ Image render(const Mesh& mesh, const RenderConfig& config) {
                 if (config.colouring == Colouring::Height) albedo = ramp((p.z() - z_lo) / (z_hi - z_lo));
                 else if (config.colouring == Colouring::Level)
                     albedo = ramp((std::max({mesh.levels[tri[0]], mesh.levels[tri[1]], mesh.levels[tri[2]]}) - 1) / 4.0);
+                else if (config.colouring == Colouring::Intensity) {
+                    double sum = 0;
+                    int n_finite = 0;
+                    for (auto corner : tri)
+                        if (std::isfinite(mesh.intensity[corner])) sum += mesh.intensity[corner], ++n_finite;
+                    albedo = n_finite ? Eigen::Vector3d::Constant(0.08 + 0.9 * std::clamp((sum / n_finite - i_lo) / (i_hi - i_lo), 0.0, 1.0))
+                                      : Eigen::Vector3d(0.55, 0.65, 0.8);  // no return near: pale blue
+                }
                 const double shade = 0.25 + 0.55 * std::max(0.0, n.dot(key)) + 0.25 * std::max(0.0, -n.dot(dir));
                 c = albedo * shade;
             } else {

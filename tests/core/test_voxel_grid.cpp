@@ -430,3 +430,71 @@ TEST(VoxelGrid, ARefusedBatchLeavesNoOrigin) {
     EXPECT_EQ(after.origin(), fresh.origin());
     EXPECT_EQ(after.size(), fresh.size());
 }
+
+TEST(VoxelGridIntensity, EachVoxelKeepsTheMeanOfItsPointsThatHadOne) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.5, 1.5);
+    std::uniform_real_distribution<float> value(0.0f, 255.0f);
+    const double alpha = 0.25;
+    VoxelGrid grid(alpha, Eigen::Vector3d::Zero());
+    // Brute force: sums and counts by voxel of the finite intensities, over three batches (the
+    // second without intensity, the third with NaNs).
+    std::map<KeyTuple, std::pair<double, int>> expected;
+    std::set<KeyTuple> occupied;
+    auto key = [&](const Eigen::Vector3d& p) {
+        return KeyTuple{int(std::floor(p.x() / alpha)), int(std::floor(p.y() / alpha)), int(std::floor(p.z() / alpha))};
+    };
+    for (int batch = 0; batch < 3; ++batch) {
+        std::vector<Eigen::Vector3d> pts;
+        std::vector<float> intensity;
+        for (int i = 0; i < 4000; ++i) {
+            pts.emplace_back(u(rng), u(rng), 0.3 * u(rng));
+            intensity.push_back(batch == 2 && i % 7 == 0 ? std::numeric_limits<float>::quiet_NaN() : value(rng));
+            occupied.insert(key(pts.back()));
+            if (batch != 1 && std::isfinite(intensity.back())) {
+                auto& e = expected[key(pts.back())];
+                e.first += intensity.back();
+                ++e.second;
+            }
+        }
+        if (batch == 1) grid.insert(std::span<const Eigen::Vector3d>(pts));
+        else grid.insert(std::span<const Eigen::Vector3d>(pts), std::nullopt, nullptr, intensity);
+        EXPECT_TRUE(grid.has_intensity());
+    }
+    ASSERT_EQ(grid.size(), occupied.size());
+    for (std::size_t v = 0; v < grid.size(); ++v) {
+        const VoxelKey& k = grid.keys()[v];
+        const auto [mean, count] = grid.voxel_intensity(v);
+        const auto it = expected.find({k.x(), k.y(), k.z()});
+        if (it == expected.end()) {
+            EXPECT_EQ(count, 0u);
+            continue;
+        }
+        EXPECT_EQ(count, static_cast<std::uint32_t>(it->second.second));
+        EXPECT_NEAR(mean, it->second.first / it->second.second, 1e-4 * 255);
+    }
+    // A box's mean: every point with an intensity in it, weighted alike.
+    const VoxelKey lo(-3, -2, -1), hi(2, 1, 0);
+    double sum = 0, n = 0;
+    for (const auto& [k, e] : expected)
+        if (std::get<0>(k) >= lo.x() && std::get<0>(k) <= hi.x() && std::get<1>(k) >= lo.y() && std::get<1>(k) <= hi.y() &&
+            std::get<2>(k) >= lo.z() && std::get<2>(k) <= hi.z())
+            sum += e.first, n += e.second;
+    ASSERT_GT(n, 0);
+    EXPECT_NEAR(*grid.mean_intensity(lo, hi), sum / n, 1e-4 * 255);
+    EXPECT_FALSE(grid.mean_intensity(VoxelKey(100, 100, 100), VoxelKey(101, 101, 101)));
+    // A removed voxel takes its intensity with it; the voxel moved into its place keeps its own.
+    const std::size_t last = grid.size() - 1;
+    const auto moved = grid.voxel_intensity(last);
+    grid.remove(0);
+    EXPECT_EQ(grid.voxel_intensity(0), moved);
+}
+
+TEST(VoxelGridIntensity, AWrongNumberOfValuesIsRefused) {
+    VoxelGrid grid(0.2);
+    const std::vector<Eigen::Vector3d> pts{{0, 0, 0}, {1, 0, 0}};
+    const std::vector<float> one{1.0f};
+    EXPECT_THROW(grid.insert(std::span<const Eigen::Vector3d>(pts), std::nullopt, nullptr, one), InvalidArgument);
+    EXPECT_EQ(grid.size(), 0u);
+    EXPECT_FALSE(grid.has_intensity());
+}

@@ -77,7 +77,11 @@ void put(std::vector<std::uint8_t>& b, std::size_t at, T v) {
     std::memcpy(b.data() + at, &v, sizeof v);
 }
 
-// One lidar packet: columns first..first+per_packet-1 of frame `frame`, range(column, beam, return) in mm.
+/// The reflectivity the test packets give a pixel's return (1-251).
+inline std::uint8_t reflectivity_of(int column, int beam, int ret) { return static_cast<std::uint8_t>((column * 7 + beam * 13 + ret * 101) % 251 + 1); }
+
+// One lidar packet: columns first..first+per_packet-1 of frame `frame`, range(column, beam, return) in mm,
+// reflectivity_of(column, beam, return) where the manual puts each profile's reflectivity.
 using RangeOf = std::function<std::uint32_t(int column, int beam, int ret)>;
 inline std::vector<std::uint8_t> packet(const Sensor& s, std::uint32_t frame, int first, const RangeOf& range, std::uint64_t t0 = 1000000000,
                                         std::uint64_t column_ns = 50000) {
@@ -114,6 +118,12 @@ inline std::vector<std::uint8_t> packet(const Sensor& s, std::uint32_t frame, in
                 put<std::uint16_t>(b, p, static_cast<std::uint16_t>(r0 >> 3));
                 put<std::uint16_t>(b, p + 4, static_cast<std::uint16_t>(r1 >> 3));
             }
+            const std::uint8_t f0 = reflectivity_of(id, beam, 0), f1 = reflectivity_of(id, beam, 1);
+            if (s.profile == "LEGACY") put<std::uint16_t>(b, p + 4, f0);  // 16 bits
+            else if (s.profile == "RNG19_RFL8_SIG16_NIR16") b[p + 4] = f0;
+            else if (s.profile == "RNG19_RFL8_SIG16_NIR16_DUAL") b[p + 3] = f0, b[p + 7] = f1;
+            else if (s.profile == "RNG15_RFL8_NIR8") b[p + 2] = f0;
+            else b[p + 2] = f0, b[p + 6] = f1;
         }
     }
     return b;

@@ -1,7 +1,7 @@
 // Binary glTF checked by readers that are not the writer: Draco's own glTF decoder (libdraco)
 // for the scene as a whole (node transforms applied), Draco's bitstream decoder for compressed
 // primitives, and a reader of the container written here from the glTF 2.0 specification for the
-// attributes Draco's glTF decoder drops (_CONFIDENCE, _LEVEL) and the double-precision origin.
+// attributes Draco's glTF decoder drops (_CONFIDENCE, _INTENSITY, _LEVEL) and the double-precision origin.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -24,7 +24,8 @@ using namespace lidarsurf;
 
 namespace {
 
-// A UV sphere of radius `r` around `centre`: unit normals, levels and confidence that vary.
+// A UV sphere of radius `r` around `centre`: unit normals, levels, confidence and intensity that
+// vary (every 17th vertex without an intensity: NaN).
 Mesh sphere(const Eigen::Vector3d& centre, double r, int rings = 16, int segments = 32) {
     Mesh m;
     const double pi = std::numbers::pi;
@@ -49,6 +50,7 @@ Mesh sphere(const Eigen::Vector3d& centre, double r, int rings = 16, int segment
         m.normals.push_back(((m.vertices[i] - centre) / r).cast<float>());
         m.levels.push_back(static_cast<std::uint8_t>(i % 5));
         m.confidence.push_back(static_cast<float>(0.5 + 0.5 * std::sin(0.37 * static_cast<double>(i))));
+        m.intensity.push_back(i % 17 == 5 ? NAN : static_cast<float>(100 + 90 * std::cos(0.23 * static_cast<double>(i))));
     }
     return m;
 }
@@ -180,6 +182,7 @@ TEST(Glb, AttributesAndAFarOriginKeepTheirValues) {
     const auto pos = g.values<float>(attr["POSITION"].get<int>());
     const auto nrm = g.values<float>(attr["NORMAL"].get<int>());
     const auto conf = g.values<float>(attr["_CONFIDENCE"].get<int>());
+    const auto inten = g.values<float>(attr["_INTENSITY"].get<int>());
     const auto lev = g.values<std::uint8_t>(attr["_LEVEL"].get<int>());
     const auto idx = g.values<std::uint32_t>(g.primitive()["indices"].get<int>());
     ASSERT_EQ(pos.size(), 3 * m.vertices.size());
@@ -188,6 +191,7 @@ TEST(Glb, AttributesAndAFarOriginKeepTheirValues) {
         ASSERT_LT((p - m.vertices[i]).norm(), 1e-5) << i;
         ASSERT_LT((Eigen::Vector3f(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]) - m.normals[i]).norm(), 1e-6f) << i;
         ASSERT_EQ(conf[i], m.confidence[i]) << i;
+        ASSERT_EQ(inten[i], std::isnan(m.intensity[i]) ? -1.0f : m.intensity[i]) << i;  // glTF has no NaN
         ASSERT_EQ(lev[i], m.levels[i]) << i;
     }
     ASSERT_EQ(idx.size(), 3 * m.triangles.size());
@@ -223,7 +227,8 @@ TEST(Glb, DracoKeepsEveryTriangleAndVertexWithinAMillimetre) {
     const auto* conf = dm.GetAttributeByUniqueId(ext["attributes"]["_CONFIDENCE"].get<std::uint32_t>());
     const auto* lev = dm.GetAttributeByUniqueId(ext["attributes"]["_LEVEL"].get<std::uint32_t>());
     const auto* nrm = dm.GetAttributeByUniqueId(ext["attributes"]["NORMAL"].get<std::uint32_t>());
-    ASSERT_TRUE(conf && lev && nrm);
+    const auto* inten = dm.GetAttributeByUniqueId(ext["attributes"]["_INTENSITY"].get<std::uint32_t>());
+    ASSERT_TRUE(conf && lev && nrm && inten);
     // Each decoded point is the original vertex nearest to it (the sphere's are > 1 cm apart).
     std::vector<Eigen::Vector3d> local;
     const auto* pos = dm.GetAttributeByUniqueId(ext["attributes"]["POSITION"].get<std::uint32_t>());
@@ -236,8 +241,14 @@ TEST(Glb, DracoKeepsEveryTriangleAndVertexWithinAMillimetre) {
     EXPECT_LT(farthest(local, m.vertices, &original), kDracoError);
     float lo = INFINITY, hi = -INFINITY;
     for (float c : m.confidence) lo = std::min(lo, c), hi = std::max(hi, c);
+    const auto written = [&](std::size_t o) { return std::isnan(m.intensity[o]) ? -1.0f : m.intensity[o]; };
+    float ilo = INFINITY, ihi = -INFINITY;
+    for (std::size_t o = 0; o < m.vertices.size(); ++o) ilo = std::min(ilo, written(o)), ihi = std::max(ihi, written(o));
     for (draco::PointIndex i(0); i < dm.num_points(); ++i) {
         const std::size_t o = original[i.value()];
+        float intensity;
+        inten->GetMappedValue(i, &intensity);
+        ASSERT_LE(std::fabs(intensity - written(o)), (ihi - ilo) / 4095 + 1e-4f) << "12 bits over the range";
         float c, n[3];
         std::uint8_t k;
         conf->GetMappedValue(i, &c);
@@ -266,6 +277,7 @@ TEST(Glb, StreamedPartsMakeTheFileOfTheWholeMesh) {
                     local[t[k]] = static_cast<std::int64_t>(part.vertices.size());
                     part.vertices.push_back(m.vertices[t[k]]), part.normals.push_back(m.normals[t[k]]);
                     part.levels.push_back(m.levels[t[k]]), part.confidence.push_back(m.confidence[t[k]]);
+                    part.intensity.push_back(m.intensity[t[k]]);
                     if (seam) seam->push_back(written_as[t[k]]);
                 }
                 tri[k] = static_cast<std::uint32_t>(local[t[k]]);

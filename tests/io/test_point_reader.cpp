@@ -142,19 +142,28 @@ std::string pcd_header(const std::string& data, std::size_t n) {
 TEST(Pcd, AsciiBinaryAndCompressed) {
     const auto pts = sample_points();
     std::string ascii = pcd_header("ascii", 3);
-    for (const auto& p : pts) ascii += std::to_string(p.x()) + " " + std::to_string(p.y()) + " " + std::to_string(p.z()) + " 5\n";
+    // The intensity field: 5, 6, 7 for the three points, read into the cloud's intensities.
+    const auto intensity_of = [](std::size_t i) { return 5.0f + static_cast<float>(i); };
+    const auto expect_intensities = [&](const PointCloud& c) {
+        ASSERT_EQ(c.intensities.size(), pts.size());
+        for (std::size_t i = 0; i < pts.size(); ++i) EXPECT_EQ(c.intensities[i], intensity_of(i)) << i;
+    };
+    for (std::size_t i = 0; i < pts.size(); ++i)
+        ascii += std::to_string(pts[i].x()) + " " + std::to_string(pts[i].y()) + " " + std::to_string(pts[i].z()) + " " + std::to_string(5 + i) + "\n";
     expect_points(parse_pcd_points(ascii, "ascii"), pts, 1e-6);
+    expect_intensities(parse_pcd_points(ascii, "ascii"));
 
     std::string binary = pcd_header("binary", 3), aos, soa;
-    for (const auto& p : pts) {
-        for (int a = 0; a < 3; ++a) append<float>(aos, static_cast<float>(p[a]));
-        append<float>(aos, 5.0f);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        for (int a = 0; a < 3; ++a) append<float>(aos, static_cast<float>(pts[i][a]));
+        append<float>(aos, intensity_of(i));
     }
     expect_points(parse_pcd_points(binary + aos, "binary"), pts);
+    expect_intensities(parse_pcd_points(binary + aos, "binary"));
     EXPECT_THROW(parse_pcd_points(binary + aos.substr(0, 40), "truncated"), FormatError);
 
     for (int field = 0; field < 4; ++field)  // binary_compressed stores the fields one after another
-        for (const auto& p : pts) append<float>(soa, field < 3 ? static_cast<float>(p[field]) : 5.0f);
+        for (std::size_t i = 0; i < pts.size(); ++i) append<float>(soa, field < 3 ? static_cast<float>(pts[i][field]) : intensity_of(i));
     std::vector<char> packed(soa.size() * 2 + 16);
     const unsigned csize = lzf_compress(soa.data(), static_cast<unsigned>(soa.size()), packed.data(), static_cast<unsigned>(packed.size()));
     ASSERT_GT(csize, 0u);
@@ -163,6 +172,12 @@ TEST(Pcd, AsciiBinaryAndCompressed) {
     append<std::uint32_t>(compressed, static_cast<std::uint32_t>(soa.size()));
     compressed.append(packed.data(), csize);
     expect_points(parse_pcd_points(compressed, "compressed"), pts);
+    expect_intensities(parse_pcd_points(compressed, "compressed"));
+    EXPECT_TRUE(parse_pcd_points("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA ascii\n1 2 3\n", "xyz").intensities.empty());
+    // An intensity past float's range is no intensity (NaN), not an undefined conversion.
+    const PointCloud far = parse_pcd_points("FIELDS x y z intensity\nSIZE 4 4 4 8\nTYPE F F F F\nPOINTS 1\nDATA ascii\n1 2 3 1e300\n", "far");
+    ASSERT_EQ(far.intensities.size(), 1u);
+    EXPECT_TRUE(std::isnan(far.intensities[0]));
     std::string corrupt = compressed;
     corrupt[corrupt.size() - csize] = '\xff';  // first LZF control byte: a back reference before the start
     EXPECT_THROW(parse_pcd_points(corrupt, "corrupt"), FormatError);

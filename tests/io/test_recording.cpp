@@ -56,6 +56,7 @@ TEST(OusterSweeps, EveryProfileGivesTheManualsRayDirectionsAtTheEncodedRange) {
         EXPECT_EQ(scan.no_return.size(), empty);
         ASSERT_EQ(scan.times.size(), expected);
         ASSERT_EQ(scan.cloud.rings.size(), expected);
+        ASSERT_EQ(scan.cloud.intensities.size(), expected);
         std::size_t i = 0;
         for (int c = 0; c < s.columns; ++c) {
             for (int b = 0; b < s.beams; ++b) {
@@ -67,6 +68,7 @@ TEST(OusterSweeps, EveryProfileGivesTheManualsRayDirectionsAtTheEncodedRange) {
                 EXPECT_NEAR(std::asin(p.z() / p.norm()), s.altitude()[b] * M_PI / 180, 1e-9);
                 EXPECT_NEAR(wrap(std::atan2(p.y(), p.x()) - (2 * M_PI * (1 - c / double(s.columns)) - s.azimuth()[b] * M_PI / 180)), 0, 1e-9);
                 EXPECT_EQ(scan.cloud.rings[i], b);
+                EXPECT_EQ(scan.cloud.intensities[i], reflectivity_of(c, b, 0));
                 EXPECT_NEAR(scan.times[i], 50e-6 * c, 1e-9);
                 ++i;
             }
@@ -86,6 +88,11 @@ TEST(OusterSweeps, DualProfilesGiveSecondReturnsWhenAsked) {
         const RecordedScan scan = sweeps.take();
         std::size_t near = 0, far = 0;
         for (const auto& p : scan.cloud.points) (std::abs(p.norm() - 3) < 1e-9 ? near : far) += 1;
+        ASSERT_EQ(scan.cloud.intensities.size(), scan.cloud.points.size());
+        for (std::size_t i = 0; i < scan.cloud.points.size(); ++i) {  // each return its own reflectivity
+            const int c = static_cast<int>(std::lround(scan.times[i] / 50e-6)), r = std::abs(scan.cloud.points[i].norm() - 3) < 1e-9 ? 0 : 1;
+            EXPECT_EQ(scan.cloud.intensities[i], reflectivity_of(c, scan.cloud.rings[i], r)) << i;
+        }
         EXPECT_EQ(near, std::size_t(s.columns * s.beams));
         EXPECT_EQ(far, std::size_t(s.columns * s.beams / 2));
     }
@@ -392,7 +399,7 @@ TEST(RealOuster, TheDriversRawPacketBagIsReadWithItsMetadataTopic) {
 // ---- ROS 1 bags written by ROS's own writer. ----
 
 struct Expected {
-    std::vector<std::vector<std::array<double, 4>>> messages;  // x y z t (t NaN: none)
+    std::vector<std::vector<std::array<double, 5>>> messages;  // x y z t i (t, i NaN: none)
 };
 
 Expected read_expected(const fs::path& path) {
@@ -405,10 +412,11 @@ Expected read_expected(const fs::path& path) {
             continue;
         }
         std::istringstream s(line);
-        std::array<double, 4> v{};
-        std::string t;
-        s >> v[0] >> v[1] >> v[2] >> t;
+        std::array<double, 5> v{};
+        std::string t, i;
+        s >> v[0] >> v[1] >> v[2] >> t >> i;
         v[3] = t == "none" ? NAN : std::stod(t);
+        v[4] = i == "none" ? NAN : std::stod(i);
         e.messages.back().push_back(v);
     }
     return e;
@@ -446,10 +454,15 @@ TEST_F(Ros1Bag, EveryPointCloud2LayoutGivesThePointsAndTimesTheWriterPutIn) {
             EXPECT_EQ(scan.frame_id, "lidar");
             const bool times = !std::isnan(want.front()[3]);
             ASSERT_EQ(scan.times.size(), times ? want.size() : 0u);
+            const bool intensities = !std::isnan(want.front()[4]);
+            ASSERT_EQ(scan.cloud.intensities.size(), intensities ? want.size() : 0u);
             for (std::size_t i = 0; i < want.size(); ++i) {
                 for (int a = 0; a < 3; ++a) EXPECT_NEAR(scan.cloud.points[i][a], want[i][a], 1e-6 * (1 + std::abs(want[i][a])));
                 if (times) {
                     EXPECT_NEAR(scan.times[i], want[i][3], 2e-6);
+                }
+                if (intensities) {
+                    EXPECT_EQ(scan.cloud.intensities[i], want[i][4]);
                 }
             }
         }

@@ -24,6 +24,9 @@ using namespace lidarsurf::test;
 // raw distance (2 mm counts) of channel j of block b of packet k; 0 = no return.
 using RawOf = std::function<std::uint16_t(int packet, int block, int channel)>;
 
+// The reflectivity byte of channel j of block b in the test packets.
+std::uint8_t channel_reflectivity(int block, int channel) { return static_cast<std::uint8_t>((block * 31 + channel * 7) % 255); }
+
 constexpr std::uint32_t kPastHourUs = 800000000;  // the test pcaps are captured 800 s past an hour
 
 std::vector<std::uint8_t> velodyne_packet(int k, int first_azimuth, int azimuth_step, const RawOf& raw, std::uint8_t product = 0x22,
@@ -34,7 +37,10 @@ std::vector<std::uint8_t> velodyne_packet(int k, int first_azimuth, int azimuth_
         put<std::uint16_t>(b, at, 0xEEFF);
         const int firing = dual ? blk / 2 : blk;
         put<std::uint16_t>(b, at + 2, static_cast<std::uint16_t>((first_azimuth + azimuth_step * firing) % 36000));
-        for (int j = 0; j < 32; ++j) put<std::uint16_t>(b, at + 4 + 3 * j, raw(k, blk, j));
+        for (int j = 0; j < 32; ++j) {
+            put<std::uint16_t>(b, at + 4 + 3 * j, raw(k, blk, j));
+            b[at + 6 + 3 * j] = channel_reflectivity(blk, j);  // the manual: 2 bytes of distance, 1 of reflectivity
+        }
     }
     put<std::uint32_t>(b, 1200, stamp_us);
     b[1204] = mode;
@@ -84,6 +90,7 @@ TEST(VelodyneSweeps, AVlp16PacketGivesTheManualsAnglesRangesAndFiringTimes) {
             EXPECT_NEAR(scan.times[i], t_us * 1e-6, 1e-9);
             // Rings from the top: laser 15 (+15 degrees) is ring 0, laser 0 (-15) ring 15.
             EXPECT_EQ(scan.cloud.rings[i], laser % 2 ? 7 - (laser - 1) / 2 : 15 - laser / 2);
+            EXPECT_EQ(scan.cloud.intensities.at(i), channel_reflectivity(b, j));
             ++i;
         }
     }

@@ -3,12 +3,14 @@
 
 write_ros1_bag.py OUT_DIR writes OUT_DIR/clouds.bag (uncompressed chunks), clouds_bz2.bag and
 clouds_lz4.bag (the same messages in compressed chunks) and, per topic, OUT_DIR/<topic>.txt with the
-points the bags hold: one line "x y z t" per point with a return (t: seconds after the stamp).
+points the bags hold: one line "x y z t i" per point with a return (t: seconds after the stamp,
+i: the intensity the reader should give it; "none" when the message has none).
 Topics:
-  /float32_padded   x y z float32, intensity float32, t uint32 ns, ring uint16; point_step 32
+  /float32_padded   x y z float32, intensity float32, t uint32 ns, ring uint16, reflectivity uint16
+                    (the calibrated one: the reader's intensity); point_step 32
   /float64_big      x y z float64 big endian, time float32 s; 2 messages
   /organized        4 x 8 organized, float32, rays without return as NaN and as 0,0,0
-  /hesai            x y z float32, timestamp float64 absolute seconds
+  /hesai            x y z float32, timestamp float64 absolute seconds, intensity uint8
   /bad_row_step     a cloud whose row_step disagrees with its data (after one good message)
 """
 import math
@@ -58,8 +60,8 @@ def main():
         with open(os.path.join(out, topic + ".txt"), "w") as f:
             for k, lines in enumerate(messages):
                 f.write("message %d\n" % k)
-                for x, y, z, t in lines:
-                    f.write("%.9g %.9g %.9g %s\n" % (x, y, z, "none" if t is None else "%.9g" % t))
+                for x, y, z, t, *i in lines:
+                    f.write("%.9g %.9g %.9g %s %s\n" % (x, y, z, "none" if t is None else "%.9g" % t, "%.9g" % i[0] if i else "none"))
 
 
 def write_messages(bag):
@@ -71,11 +73,11 @@ def write_messages(bag):
     lines = []
     for i, (x, y, z) in enumerate(pts):
         t_ns = 1000 * i
-        data += struct.pack("<fff4xfIH6x", x, y, z, 7.0, t_ns, i % 16)
+        data += struct.pack("<fff4xfIHH4x", x, y, z, 7.0, t_ns, i % 16, 3 * i + 1)
         xf, yf, zf = struct.unpack("<fff", struct.pack("<fff", x, y, z))
-        lines.append((xf, yf, zf, t_ns * 1e-9))
+        lines.append((xf, yf, zf, t_ns * 1e-9, 3 * i + 1))
     bag.write("/float32_padded", cloud(100.0, [("x", 0, F32), ("y", 4, F32), ("z", 8, F32), ("intensity", 16, F32),
-                                               ("t", 20, U32), ("ring", 24, U16)], 32, 1, len(pts), data),
+                                               ("t", 20, U32), ("ring", 24, U16), ("reflectivity", 26, U16)], 32, 1, len(pts), data),
               rospy.Time.from_sec(100.0))
     expected["float32_padded"] = [lines]
     # float64, big endian, float32 seconds (Velodyne's driver layout); two messages.
@@ -111,9 +113,10 @@ def write_messages(bag):
     data = bytearray()
     lines = []
     for i, (x, y, z) in enumerate(pts):
-        data += struct.pack("<fffd", x, y, z, 400.0 + 0.001 * i)
-        lines.append(struct.unpack("<fff", struct.pack("<fff", x, y, z)) + (0.001 * i,))
-    bag.write("/hesai", cloud(400.0, [("x", 0, F32), ("y", 4, F32), ("z", 8, F32), ("timestamp", 12, F64)], 20, 1, 20, data),
+        data += struct.pack("<fffdB", x, y, z, 400.0 + 0.001 * i, 200 - i)
+        lines.append(struct.unpack("<fff", struct.pack("<fff", x, y, z)) + (0.001 * i, 200 - i))
+    bag.write("/hesai", cloud(400.0, [("x", 0, F32), ("y", 4, F32), ("z", 8, F32), ("timestamp", 12, F64), ("intensity", 20, PointField.UINT8)],
+                              21, 1, 20, data),
               rospy.Time.from_sec(400.0))
     expected["hesai"] = [lines]
     # One good message, then one whose row_step is 4 bytes short of its data.

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/sim/mesh_builder.hpp"
 
 using namespace lidarsurf;
@@ -83,6 +84,38 @@ TEST(MeshBuilder, HeightFieldSamplesTheFunctionAndFacesUp) {
         EXPECT_GT((v[t[1]] - v[t[0]]).cross(v[t[2]] - v[t[0]]).z(), 0);
     }
     EXPECT_EQ(b.mesh().triangles.size(), 2u * 20 * 20);  // 20 x 20 cells of 0.5 m
+}
+
+TEST(MeshBuilder, ReflectivityFollowsThePartsAndAppendKeepsIt) {
+    MeshBuilder plain;
+    plain.box_between({0, 0, 0}, {1, 1, 1});
+    EXPECT_TRUE(plain.mesh().intensity.empty());  // off until set
+    MeshBuilder b;
+    b.box_between({0, 0, 0}, {1, 1, 1});  // before: the default
+    b.set_reflectivity(0.6f);
+    b.box_between({2, 0, 0}, {3, 1, 1});
+    b.append(plain.mesh());  // no intensity of its own: the current one
+    MeshBuilder other;
+    other.set_reflectivity(0.9f);
+    other.box_between({4, 0, 0}, {5, 1, 1});
+    b.append(other.mesh());
+    const Mesh& m = b.mesh();
+    ASSERT_EQ(m.intensity.size(), m.vertices.size());
+    for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+        const double x = m.vertices[i].x();
+        const float expected = x <= 1 ? MeshBuilder::kDefaultReflectivity : x <= 3 ? 0.6f : 0.9f;
+        // The appended plain box lies at x in [0, 1] too: it took 0.6.
+        if (i >= 16 && i < 24) EXPECT_EQ(m.intensity[i], 0.6f) << i;
+        else EXPECT_EQ(m.intensity[i], expected) << i;
+    }
+    EXPECT_THROW(b.set_reflectivity(1.5f), InvalidArgument);
+    EXPECT_THROW(b.set_reflectivity(std::nanf("")), InvalidArgument);
+    MeshBuilder late;  // a builder that only appends a reflective mesh turns reflectivity on
+    late.box_between({0, 0, 0}, {1, 1, 1});
+    late.append(other.mesh());
+    ASSERT_EQ(late.mesh().intensity.size(), 16u);
+    EXPECT_EQ(late.mesh().intensity[0], MeshBuilder::kDefaultReflectivity);
+    EXPECT_EQ(late.mesh().intensity[15], 0.9f);
 }
 
 }  // namespace

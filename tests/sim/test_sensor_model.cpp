@@ -7,6 +7,8 @@
 
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/sim/analytic_scene.hpp"
+#include "lidarsurf/sim/mesh_builder.hpp"
+#include "lidarsurf/sim/mesh_scene.hpp"
 #include "lidarsurf/sim/sensor_model.hpp"
 
 using namespace lidarsurf;
@@ -50,7 +52,10 @@ TEST(SensorModel, JsonRoundTripAndErrors) {
     EXPECT_EQ(back.elevations_deg, s.elevations_deg);
     EXPECT_EQ(back.azimuth_step_deg, s.azimuth_step_deg);
     EXPECT_EQ(back.range_noise, s.range_noise);
+    EXPECT_EQ(back.intensity_noise, s.intensity_noise);
     EXPECT_EQ(back.mount_height, 2.1);
+    EXPECT_EQ(SensorModel::from_json(R"({"elevations_deg": [0], "intensity_noise": 0.1})").intensity_noise, 0.1);
+    EXPECT_THROW(SensorModel::from_json(R"({"elevations_deg": [0], "intensity_noise": -0.1})"), InvalidArgument);
     const SensorModel even = SensorModel::from_json(R"({"beams": 5, "elevation_max_deg": 4, "elevation_min_deg": -4})");
     EXPECT_EQ(even.elevations_deg, (std::vector<double>{4, 2, 0, -2, -4}));
     EXPECT_THROW(SensorModel::from_json("{"), FormatError);
@@ -92,6 +97,43 @@ TEST(SensorModel, NoiseAndDropoutStatistics) {
     EXPECT_NEAR(n, 0.9 * rays, 4 * std::sqrt(rays * 0.1 * 0.9));  // binomial, 4 sigma
     EXPECT_NEAR(sum / n, 0.0, 4 * 0.05 / std::sqrt(n));
     EXPECT_NEAR(std::sqrt(sq / n), 0.05, 0.05 * 0.03);
+}
+
+// Two walls 10 m ahead, 0.3 and 0.7 reflective, split at y = 0: each return's intensity is its
+// wall's, with the sensor's intensity noise, drawn apart from its range noise; a scene without
+// reflectivity gives no intensity.
+TEST(SensorModel, ReturnsReadTheirSurfacesReflectivity) {
+    MeshBuilder b;
+    b.set_reflectivity(0.3f);
+    b.box_between({10, -1000, -1000}, {11, 0, 1000});
+    b.set_reflectivity(0.7f);
+    b.box_between({10, 0, -1000}, {11, 1000, 1000});
+    const MeshScene walls(b.mesh());
+    SensorModel s;
+    s.elevations_deg = {0.0};
+    s.azimuth_step_deg = 0.01;
+    s.range_noise = 0.05;
+    s.intensity_noise = 0.05;
+    const PointCloud c = simulate_scan(walls, s, Eigen::Vector3d::Zero(), 5);
+    ASSERT_EQ(c.intensities.size(), c.points.size());
+    double sum[2] = {0, 0}, sq[2] = {0, 0}, n[2] = {0, 0}, cross = 0;
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+        const Eigen::Vector3d& p = c.points[i];
+        if (std::fabs(p.y()) < 0.5) continue;  // the range noise moves a return along its ray, across the split
+        const int side = p.y() > 0;
+        const double e = c.intensities[i] - (side ? 0.7 : 0.3), residual = p.norm() - 10.0 / (p.x() / p.norm());
+        sum[side] += e, sq[side] += e * e, n[side] += 1, cross += e * residual;
+    }
+    for (int side : {0, 1}) {
+        ASSERT_GT(n[side], 5000);
+        EXPECT_NEAR(sum[side] / n[side], 0.0, 4 * 0.05 / std::sqrt(n[side]));
+        EXPECT_NEAR(std::sqrt(sq[side] / n[side]), 0.05, 0.05 * 0.04);
+    }
+    const double samples = n[0] + n[1];
+    EXPECT_NEAR(cross / samples / (0.05 * 0.05), 0.0, 4 / std::sqrt(samples));  // correlation of the two noises
+    AnalyticScene grey;
+    grey.boxes.push_back({{10, -1000, -1000}, {11, 1000, 1000}});
+    EXPECT_TRUE(simulate_scan(grey, s, Eigen::Vector3d::Zero(), 5).intensities.empty());
 }
 
 TEST(SensorModel, ScansAreDeterministicWhateverTheThreadCount) {

@@ -2,6 +2,10 @@
 // return lies on the scene's triangles, every noisy one within a few sigma.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <optional>
+#include <utility>
+
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/mesh/mesh_distance.hpp"
 #include "lidarsurf/sim/mesh_scene.hpp"
@@ -37,6 +41,55 @@ TEST(ProceduralScene, SameSeedSameTrianglesOtherSeedOtherTown) {
 }
 
 // The rig rides at its mount height above the ground with nothing within a metre of the sensor.
+// The town's carriageway, probed from above: paint at each marking's centre, asphalt just outside
+// each of its edges; every surface of the worlds has a reflectivity in [0, 1], the movers too.
+TEST(ProceduralScene, TheCarriagewayIsAsphaltWithPaintedMarkings) {
+    SceneConfig config = small(SceneKind::Town, 3);
+    config.pedestrians = 2;
+    const World w = make_world(config);
+    const MeshScene scene(w.static_mesh);
+    const auto marks = town_markings(config.length);
+    ASSERT_GT(marks.size(), 20u);
+    auto inside_any = [&](double x, double y) {
+        for (const auto& m : marks)
+            if (x > m.x0 && x < m.x1 && y > m.y0 && y < m.y1) return true;
+        return false;
+    };
+    // Probed from 0.25 m up, below the cars' hulls: only a wheel can stand in the way.
+    std::size_t probes = 0, blocked = 0;
+    auto read = [&](double x, double y) -> std::optional<float> {
+        ++probes;
+        const auto hit = scene.first_return({x, y, 0.25}, {0, 0, -1}, 1.0);
+        EXPECT_TRUE(hit) << x << " " << y;
+        if (!hit || std::fabs(hit->range - 0.25) > 1e-4) return ++blocked, std::nullopt;
+        return hit->reflectivity;
+    };
+    std::size_t outside = 0;
+    for (const auto& m : marks) {
+        const double cx = 0.5 * (m.x0 + m.x1), cy = 0.5 * (m.y0 + m.y1);
+        if (const auto r = read(cx, cy)) {
+            EXPECT_EQ(*r, Material::kRoadPaint) << cx << " " << cy;
+        }
+        for (const auto& [x, y] : {std::pair{m.x0 - 0.05, cy}, std::pair{m.x1 + 0.05, cy}, std::pair{cx, m.y0 - 0.05}, std::pair{cx, m.y1 + 0.05}}) {
+            if (std::fabs(y) > 4.95 || std::fabs(x) > config.length / 2 || inside_any(x, y)) continue;
+            if (const auto r = read(x, y)) {
+                EXPECT_EQ(*r, Material::kAsphalt) << x << " " << y;
+            }
+            ++outside;
+        }
+    }
+    EXPECT_LE(blocked, probes / 20);
+    EXPECT_GT(outside, 40u);
+    for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
+        const World world = make_world(small(kind, 3));
+        ASSERT_EQ(world.static_mesh.intensity.size(), world.static_mesh.vertices.size());
+        for (float r : world.static_mesh.intensity) ASSERT_TRUE(r >= 0 && r <= 1) << r;
+    }
+    const Mesh movers = w.movers_at(1.0);
+    ASSERT_FALSE(movers.empty());
+    EXPECT_EQ(movers.intensity.size(), movers.vertices.size());
+}
+
 TEST(ProceduralScene, TheDriveIsClear) {
     for (SceneKind kind : {SceneKind::Town, SceneKind::Offroad}) {
         const World w = make_world(small(kind));

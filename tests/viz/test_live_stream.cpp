@@ -4,6 +4,7 @@
 // their block, keep 0.25 mm); malformed messages are refused.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -36,6 +37,7 @@ MeshBlock one_triangle() {
     b.mesh.triangles = {{0, 1, 2}};
     b.mesh.levels = {1, 2, 3};
     b.mesh.confidence = {0.5f, 0.25f, 1.0f};
+    b.mesh.intensity = {10.0f, NAN, 40.0f};
     return b;
 }
 
@@ -45,8 +47,9 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     const Eigen::Vector3d origin(1000, 2000, 10);
     const MeshBlock block = one_triangle();
     const std::string body = ls::encode_block(block, origin);
-    // key 12, counts 8, lowest corner 12, steps 8, code lengths 8; the codes, each padded to 4
-    ASSERT_GE(body.size(), 48u);
+    // key 12, counts 8, lowest corner 12, steps 8, intensity base and step 8, code lengths 8; the
+    // codes, each padded to 4
+    ASSERT_GE(body.size(), 56u);
     EXPECT_EQ(read_at<std::int32_t>(body, 0), -3);
     EXPECT_EQ(read_at<std::int32_t>(body, 8), -1);
     EXPECT_EQ(read_at<std::uint32_t>(body, 12), 3u);
@@ -57,14 +60,16 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     const float step = read_at<float>(body, 32), cstep = read_at<float>(body, 36);
     EXPECT_FLOAT_EQ(step, 0.5e-3f);        // the finest step (the block's 1 m extent needs no more than 2,000)
     EXPECT_FLOAT_EQ(cstep, 1.0f / 65535);  // its largest confidence (1) in 16 bits
-    const auto vertex_bytes = read_at<std::uint32_t>(body, 40), index_bytes = read_at<std::uint32_t>(body, 44);
+    EXPECT_EQ(read_at<float>(body, 40), 10.0f);               // the block's least intensity
+    EXPECT_FLOAT_EQ(read_at<float>(body, 44), 30.0f / 65534);  // its range in 65,534 steps
+    const auto vertex_bytes = read_at<std::uint32_t>(body, 48), index_bytes = read_at<std::uint32_t>(body, 52);
     const auto pad = [](std::size_t n) { return (n + 3) / 4 * 4; };
-    ASSERT_EQ(body.size(), 48 + pad(vertex_bytes) + pad(index_bytes));
+    ASSERT_EQ(body.size(), 56 + pad(vertex_bytes) + pad(index_bytes));
     // meshoptimizer's decoders read the codes back: 12-byte records and the triangle.
     std::uint8_t records[3 * 12];
-    ASSERT_EQ(meshopt_decodeVertexBuffer(records, 3, 12, reinterpret_cast<const unsigned char*>(body.data()) + 48, vertex_bytes), 0);
+    ASSERT_EQ(meshopt_decodeVertexBuffer(records, 3, 12, reinterpret_cast<const unsigned char*>(body.data()) + 56, vertex_bytes), 0);
     std::uint32_t tri[3];
-    ASSERT_EQ(meshopt_decodeIndexBuffer(tri, 3, 4, reinterpret_cast<const unsigned char*>(body.data()) + 48 + pad(vertex_bytes), index_bytes), 0);
+    ASSERT_EQ(meshopt_decodeIndexBuffer(tri, 3, 4, reinterpret_cast<const unsigned char*>(body.data()) + 56 + pad(vertex_bytes), index_bytes), 0);
     const auto record = [&](int i, int field) { return read_at<std::uint16_t>(std::string(reinterpret_cast<char*>(records), sizeof records), 12 * i + 2 * field); };
     // The one triangle keeps its orientation: its corners in cyclic order are vertices 0, 1, 2.
     int first = 0;
@@ -76,7 +81,10 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     EXPECT_EQ(record(v2, 2), 1000);  // z = 0.5 m
     EXPECT_EQ(record(v1, 3), 16384);  // confidence 0.25: 16383.75 steps
     EXPECT_EQ(records[12 * v2 + 8], 3);  // level of vertex 2
-    EXPECT_EQ(records[12 * v2 + 9], 0);  // zero bytes
+    EXPECT_EQ(records[12 * v2 + 9], 0);  // a zero byte
+    EXPECT_EQ(record(tri[first], 5), 0);      // intensity 10: the base
+    EXPECT_EQ(record(v1, 5), 65535);          // none (NaN)
+    EXPECT_EQ(record(v2, 5), 65534);          // 40: the top of the range
 
     ls::Header h;
     h.flags = ls::kReset | ls::kFinal;
@@ -89,7 +97,7 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     const std::string m = ls::encode_message(h, trajectory, removed, blocks);
     ASSERT_EQ(m.size(), 112u + 2 * 12 + 12 + body.size());
     EXPECT_EQ(m.substr(0, 4), "LSLV");
-    EXPECT_EQ(read_at<std::uint32_t>(m, 4), 2u);
+    EXPECT_EQ(read_at<std::uint32_t>(m, 4), 3u);
     EXPECT_EQ(read_at<std::uint32_t>(m, 8), 3u);
     EXPECT_EQ(read_at<std::uint32_t>(m, 12), 42u);
     EXPECT_EQ(read_at<double>(m, 24), 2000.0);
@@ -101,6 +109,23 @@ TEST(LiveStream, TheLayoutIsTheDocumentedOne) {
     EXPECT_EQ(read_at<float>(m, 112 + 12), 3.0f);  // x of the second trajectory point
     EXPECT_EQ(read_at<std::int32_t>(m, 136 + 4), -6);
     EXPECT_EQ(m.substr(148), body);
+
+    // Read back: each vertex's intensity within half a step, none where it had none; a block
+    // without intensity comes back without.
+    const Mesh got = ls::decode(bytes_of(m)).changed.at(0).mesh;
+    ASSERT_EQ(got.intensity.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i)
+        for (std::size_t j = 0; j < 3; ++j) {
+            if ((got.vertices[i] - block.mesh.vertices[j]).norm() > 1e-3) continue;
+            if (std::isnan(block.mesh.intensity[j])) EXPECT_TRUE(std::isnan(got.intensity[i])) << i;
+            else EXPECT_NEAR(got.intensity[i], block.mesh.intensity[j], 0.5 * 30.0 / 65534 + 1e-5) << i;
+        }
+    MeshBlock plain = one_triangle();
+    plain.mesh.intensity.clear();
+    const std::string plain_body = ls::encode_block(plain, origin);
+    EXPECT_EQ(read_at<float>(plain_body, 44), -1.0f);
+    const std::string* plain_blocks[] = {&plain_body};
+    EXPECT_TRUE(ls::decode(bytes_of(ls::encode_message(h, {}, {}, plain_blocks))).changed.at(0).mesh.intensity.empty());
 }
 
 TEST(LiveStream, TheTownDrivesBlocksComeBackWithinAQuarterOfAMillimetre) {
@@ -183,7 +208,7 @@ TEST(LiveStream, MalformedMessagesAreRefused) {
         std::memcpy(bad.data() + 136 + 12, &nv, 4);  // the block follows the header (112), a trajectory point and a removed key
         EXPECT_THROW(ls::decode(bytes_of(bad)), FormatError) << nv;
     }
-    for (std::size_t at = 136 + 48; at < good.size(); ++at) {  // any byte of the codes changed: refused, or triangles within the block
+    for (std::size_t at = 136 + 56; at < good.size(); ++at) {  // any byte of the codes changed: refused, or triangles within the block
         bad = good;
         bad[at] = static_cast<char>(bad[at] ^ 0x5A);
         try {

@@ -70,8 +70,12 @@ public:
         std::uint32_t voxel = 0;
         std::uint32_t point = 0;
     };
+    /// `intensity`, when not empty, holds one value per point (the return's intensity or
+    /// reflectivity, InvalidArgument otherwise): the first such batch turns per-voxel intensity on
+    /// for good, and each voxel then keeps the mean of its points' finite values (points without
+    /// one, earlier or in batches without intensity, are not counted in it).
     std::size_t insert(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& viewpoint = std::nullopt,
-                       std::vector<Hit>* hits = nullptr);
+                       std::vector<Hit>* hits = nullptr, std::span<const float> intensity = {});
 
     /// Empties voxel `voxel` (an index into stats()): its statistics and viewpoint are dropped, its
     /// block counts as touched, and the last voxel takes its index (keys() and stats() stay dense).
@@ -87,6 +91,15 @@ public:
     /// The point-weighted mean sensor position (local frame) of the occupied voxels with
     /// lo <= key <= hi, or nullopt when the box holds no point. Requires viewpoints.
     std::optional<Eigen::Vector3d> mean_viewpoint(const VoxelKey& lo, const VoxelKey& hi) const;
+
+    /// Whether the voxels keep their points' mean intensity (a batch with intensity was inserted).
+    bool has_intensity() const { return intensity_enabled_; }
+    /// The mean intensity of the points of the occupied voxels with lo <= key <= hi that have
+    /// one, or nullopt when there is none (or the grid keeps no intensity).
+    std::optional<double> mean_intensity(const VoxelKey& lo, const VoxelKey& hi) const;
+    /// The mean intensity of voxel `voxel` (an index into stats()) and how many points it is
+    /// the mean of (0: none had one). Requires has_intensity().
+    std::pair<float, std::uint32_t> voxel_intensity(std::size_t voxel) const { return {intensity_[voxel].mean, intensity_[voxel].count}; }
 
     /// Index of the voxel containing a local-frame point.
     VoxelKey key_of_local(const Eigen::Vector3d& local_point) const;
@@ -230,6 +243,16 @@ private:
     // Per voxel when enabled: the mean of its points' sensor positions (local frame; float: 1e-3 m at
     // 10 km, for orienting a plane toward the sensors that saw it).
     std::vector<Eigen::Vector3f> viewpoint_means_;
+    bool intensity_enabled_ = false;
+    // Per voxel when enabled: the mean intensity of its points that had one, and their count.
+    struct IntensityMean {  // one voxel's: its returns' mean intensity and how many they are (side by side: one cache line)
+        float mean = 0;
+        std::uint32_t count = 0;
+    };
+    std::vector<IntensityMean> intensity_;
+    // Adds the batch's intensities to the voxels of its runs (insert's step 4).
+    void add_intensity(std::span<const float> intensity, std::span<const std::uint32_t> voxel, std::span<const std::uint32_t> order,
+                       std::span<const std::size_t> runs);
 };
 
 template <typename F>

@@ -7,12 +7,14 @@
 //     the JSON), with positions as float offsets from it: a map in UTM coordinates keeps its
 //     millimetres. Its translation and positions together are the mesh's world coordinates.
 // Vertex attributes: POSITION, NORMAL, and the reconstruction's own as glTF application-specific
-// attributes: _CONFIDENCE (float, the Eq. (3) value) and _LEVEL (unsigned byte, k'). Triangles are
+// attributes: _CONFIDENCE (float, the Eq. (3) value), _INTENSITY (float, the returns' mean
+// intensity in the sensor's unit; -1 where the PLY has NaN, as glTF refuses NaN) when the mesh has
+// one, and _LEVEL (unsigned byte, k'). Triangles are
 // uint32 indices, counter-clockwise from the front; the material is grey and double-sided.
 //
 // With Draco (KHR_draco_mesh_compression, Debian's libdraco) each primitive is one Draco
-// bitstream: positions quantized to 1 mm, normals to 10 bits, confidence to 10 bits over its
-// range, levels exact. A mesh written part by part (MeshStreamWriter) gets one primitive a part,
+// bitstream: positions quantized to 1 mm, normals to 10 bits, confidence to 10 bits and intensity
+// to 12 bits over their ranges, levels exact. A mesh written part by part (MeshStreamWriter) gets one primitive a part,
 // so a seam's vertices are repeated in each part that uses them; the triangles are the same.
 #include <ostream>
 

@@ -46,7 +46,7 @@ private:
     MeshFormat format_;
     bool dbl_;
     bool has_layout_ = false;
-    bool normals_ = false, levels_ = false, confidence_ = false;
+    bool normals_ = false, levels_ = false, confidence_ = false, intensity_ = false;
     std::uint64_t vertices_ = 0, triangles_ = 0;
     std::unique_ptr<AtomicFile> out_;
     std::unique_ptr<AtomicDirectory> spill_;  // PLY: the records until commit()

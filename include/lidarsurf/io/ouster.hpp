@@ -4,6 +4,7 @@
 // FUSA_RNG15_RFL8_NIR8_DUAL), assembled into sweeps. The pixel-to-point model is the one of
 // Ouster's firmware manual: a beam leaves its origin on a circle of radius
 // lidar_origin_to_beam_origin around the encoder axis, at the beam's altitude and azimuth offset.
+// Each point keeps its pixel's calibrated reflectivity as its intensity (0-255; LEGACY: 16 bits).
 #include <cstdint>
 #include <filesystem>
 #include <optional>

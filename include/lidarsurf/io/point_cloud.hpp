@@ -1,6 +1,6 @@
 #pragma once
-// A point cloud as read from a file: positions, and the ring of each point when asked for
-// (other fields are ignored by the readers).
+// A point cloud as read from a file: positions, the intensity of each point when the file has
+// one, and the ring of each point when asked for (other fields are ignored by the readers).
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -13,6 +13,8 @@ namespace lidarsurf {
 struct PointCloud {
     std::vector<Eigen::Vector3d> points;
     std::vector<std::uint16_t> rings = {};  ///< empty, or the laser ring of each point
+    /// empty, or the intensity of each point (reflectance, reflectivity: the sensor's unit)
+    std::vector<float> intensities = {};
 };
 
 /// Ring numbers are whole numbers in [0, kMaxRing].
@@ -24,7 +26,7 @@ inline std::optional<std::uint16_t> ring_number(double value) {
     return static_cast<std::uint16_t>(value);
 }
 
-/// Removes points with a NaN or infinite coordinate (and their rings); returns how many were removed.
+/// Removes points with a NaN or infinite coordinate (and their rings and intensities); returns how many were removed.
 std::size_t drop_non_finite(PointCloud& cloud);
 
 }  // namespace lidarsurf

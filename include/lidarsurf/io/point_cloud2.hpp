@@ -42,7 +42,9 @@ PointCloud2Message parse_cdr_point_cloud2(std::span<const std::uint8_t> bytes, c
 /// `no_returns`; in an organized cloud of beams by azimuths, their directions are estimated from
 /// its rows and columns into RecordedScan::no_return). Per-point times: Ouster `t` (uint32 ns), Velodyne `time` (float32 s after the
 /// stamp), Livox `offset_time` (uint32 ns), Hesai `timestamp` (float64 absolute s); `times` holds
-/// them as seconds after the message's stamp. Throws FormatError when the sizes disagree with the
+/// them as seconds after the message's stamp. Per-point intensity (PointCloud::intensities, in the
+/// field's own unit): `reflectivity` where there is one (Ouster, Livox), else `intensity` or
+/// `remission`. Throws FormatError when the sizes disagree with the
 /// data (width x height x point_step, row_step), a field lies outside point_step, x/y/z are
 /// missing or not float32/float64, or a time is not finite.
 RecordedScan decode_point_cloud2(const PointCloud2Message& message, const std::string& where, std::size_t* no_returns = nullptr);

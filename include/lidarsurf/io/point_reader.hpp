@@ -21,6 +21,12 @@ struct PointReadOptions {
     /// Index of the float32 that holds the ring number in .bin records (nuScenes: 4), read into
     /// PointCloud::rings; -1: none. Ring values must be whole numbers in [0, 4095].
     int ring_field = -1;
+    /// Index of the float32 that holds the intensity in .bin records (KITTI's reflectance and
+    /// nuScenes' intensity: 3), read into PointCloud::intensities; -1, or a field the records do
+    /// not have: none. A field that is 0 at every point counts as none (files written without
+    /// intensity). PLY and PCD files give theirs by the field `intensity` (or `reflectivity`,
+    /// `reflectance`, `remission`); -1 drops those too.
+    int intensity_field = 3;
     /// The most bytes the file may hold (0 = no limit): a larger file, or a stream (a pipe, a
     /// device) that runs past it, throws ResourceLimit instead of being read on without end.
     std::size_t max_bytes = 0;
@@ -30,7 +36,7 @@ struct PointReadOptions {
 PointCloud read_points(const std::filesystem::path& path, const PointReadOptions& options = {});
 
 /// Parsers on an in-memory buffer (used by read_points and by the fuzzers). `name` is for messages.
-PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name, int ring_field = -1);
+PointCloud parse_kitti_bin(std::string_view data, int fields, const std::string& name, int ring_field = -1, int intensity_field = -1);
 PointCloud parse_ply_points(std::string_view data, const std::string& name);
 PointCloud parse_pcd_points(std::string_view data, const std::string& name);
 PointCloud parse_text_points(std::string_view data, const std::string& name);

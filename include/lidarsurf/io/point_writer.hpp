@@ -1,6 +1,6 @@
 #pragma once
 // Writes point clouds, atomically, in the format the extension names (any case): KITTI .bin
-// (float32 x, y, z, intensity = 0), binary PLY, binary PCD (float32 x, y, z), or text .xyz, .txt,
+// (float32 x, y, z, and the cloud's intensity or 0), binary PLY, binary PCD (float32 x, y, z), or text .xyz, .txt,
 // .csv (x y z a line, full precision). Any other extension throws InvalidArgument.
 #include <filesystem>
 

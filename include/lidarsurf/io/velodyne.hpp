@@ -4,7 +4,8 @@
 // VLP-16 Hi-Res, VLP-32C, HDL-32E and HDL-64E (S2, S3), strongest, last and dual returns,
 // assembled into sweeps cut where the azimuth wraps. The point model is the one of the sensors'
 // manuals: a laser at its vertical angle and azimuth offset, with the HDL-64E's per-laser distance,
-// vertical and horizontal offsets and its two-point distance correction.
+// vertical and horizontal offsets and its two-point distance correction. Each point keeps its
+// channel's calibrated reflectivity byte (0-255) as its intensity.
 #include <array>
 #include <cstdint>
 #include <filesystem>

@@ -16,6 +16,10 @@ struct Mesh {
     std::vector<Eigen::Vector3f> normals;                ///< optional, per vertex (empty or |vertices|)
     std::vector<std::uint8_t> levels;                    ///< optional, k' per vertex
     std::vector<float> confidence;                       ///< optional, Eq. (3) value per vertex
+    /// optional, per vertex: the mean intensity of the returns in the neighbourhood of the
+    /// vertex's nearer lattice vertex (mesh/vertex_intensity.hpp), in the sensor's unit; NaN
+    /// where no return near it had one
+    std::vector<float> intensity;
 
     bool empty() const { return triangles.empty(); }
     /// Throws InvalidInput if attribute sizes or triangle indices are inconsistent.

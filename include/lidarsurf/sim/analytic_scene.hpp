@@ -28,9 +28,10 @@ public:
     std::vector<Box> boxes;
     std::vector<Cylinder> cylinders;
 
-    /// Range along the unit direction `dir` to the first surface hit from `origin` within
-    /// (0, max_range], or nullopt.
-    std::optional<double> intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range) const override;
+    /// The first primitive hit along the unit direction `dir` from `origin` within (0, max_range];
+    /// the analytic world has no reflectivity (NaN).
+    std::optional<RayReturn> first_return(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                          double max_range) const override;
 
     /// Unsigned distance from p to the nearest primitive surface.
     double distance(const Eigen::Vector3d& p) const;

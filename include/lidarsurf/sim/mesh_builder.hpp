@@ -1,7 +1,7 @@
 #pragma once
 // Builds closed triangle meshes of simple solids (boxes, cylinders, ellipsoids, cones) and open
 // height fields: the parts of the procedural scenes. Triangles are counter-clockwise seen from
-// outside, so face normals point out of the solid.
+// outside, so face normals point out of the solid. Each part can carry a reflectivity.
 #include <functional>
 
 #include <Eigen/Core>
@@ -27,8 +27,14 @@ public:
     /// facing +z.
     void height_field(double x0, double x1, double y0, double y1, double cell,
                       const std::function<double(double, double)>& height);
-    /// Appends another mesh (vertices and triangles only).
+    /// Appends another mesh: vertices, triangles and, once reflectivity is on, the other mesh's
+    /// per-vertex intensity (the current reflectivity where it has none).
     void append(const Mesh& other);
+    /// The reflectivity in [0, 1] of what is built from now on, kept as the mesh's per-vertex
+    /// `intensity` (what MeshScene reports for a ray that hits it). Off until first set; the
+    /// vertices built before then get kDefaultReflectivity. InvalidArgument outside [0, 1].
+    void set_reflectivity(float reflectivity);
+    static constexpr float kDefaultReflectivity = 0.2f;
 
     const Mesh& mesh() const { return mesh_; }
     Mesh take() { return std::move(mesh_); }
@@ -39,6 +45,8 @@ private:
     void quad(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d);  ///< a b c d counter-clockwise
 
     Mesh mesh_;
+    bool reflective_ = false;
+    float reflectivity_ = kDefaultReflectivity;
 };
 
 }  // namespace lidarsurf::sim

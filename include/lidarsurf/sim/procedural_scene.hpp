@@ -7,6 +7,10 @@
 //    opposite lane, lampposts, traffic signs (thin plates on poles) and trees (trunk + canopy);
 //  - offroad: hilly terrain with a winding track, rocks, bushes, broadleaf and conifer trees and
 //    a fence line.
+// Every surface has a material's reflectivity (Material below), kept as the meshes' per-vertex
+// `intensity`, so a simulated scan carries the intensity each surface should read; the town's
+// carriageway is asphalt with painted markings: edge lines, a dashed centre line and a zebra
+// crossing before each cross street.
 // A World also carries the drive: a ground path the sensor rig follows.
 #include <cstdint>
 #include <string>
@@ -20,6 +24,28 @@
 namespace lidarsurf::sim {
 
 enum class SceneKind { Town, Offroad };
+
+/// The reflectivity in [0, 1] of the worlds' materials (a calibrated lidar's scale).
+struct Material {
+    static constexpr float kAsphalt = 0.08f;
+    static constexpr float kRoadPaint = 0.6f;    ///< lane markings
+    static constexpr float kConcrete = 0.25f;    ///< curbs, sidewalks, walls
+    static constexpr float kFacade = 0.3f;
+    static constexpr float kMetal = 0.4f;        ///< poles, lampposts, fences, railings
+    static constexpr float kSignFace = 0.9f;     ///< retroreflective sheeting
+    static constexpr float kCarPaint = 0.15f;
+    static constexpr float kRubber = 0.04f;      ///< tyres
+    static constexpr float kFoliage = 0.45f;
+    static constexpr float kBark = 0.2f;
+    static constexpr float kClothing = 0.3f;     ///< pedestrians, cyclists
+    static constexpr float kSoil = 0.2f;         ///< off-road terrain
+    static constexpr float kRock = 0.3f;
+};
+
+/// The town's carriageway markings: paint rectangles (x0, x1, y0, y1) on z = 0.
+struct Marking {
+    double x0, x1, y0, y1;
+};
 
 SceneKind parse_scene_kind(std::string_view name);  ///< "town" or "offroad"; InvalidArgument otherwise
 const char* to_string(SceneKind kind);
@@ -92,5 +118,11 @@ struct World {
 };
 
 World make_world(const SceneConfig& config);
+
+/// The markings of a town street of this length (|x| <= length / 2): the edge lines
+/// (|y| in [4.7, 4.85], broken at the cross streets), the dashed centre line (|y| <= 0.075, 3 m
+/// dashes every 9 m) and, 1-4 m before each cross street, a zebra crossing of eight 0.6 m bars
+/// 0.6 m apart across the carriageway (|y| <= 4.5).
+std::vector<Marking> town_markings(double length);
 
 }  // namespace lidarsurf::sim

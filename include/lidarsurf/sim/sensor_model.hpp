@@ -24,10 +24,13 @@ struct SensorModel {
     double max_range = 120.0;
     double range_noise = 0.02;  ///< sigma of the range noise, metres
     double dropout = 0.0;       ///< probability that a return is lost
+    /// sigma of the noise on each return's intensity (the surface's reflectivity, clamped to [0, 1])
+    double intensity_noise = 0.02;
     double mount_height = 1.73; ///< metres above the ground where the rig carries it
 
     /// Throws InvalidArgument for an empty beam list, non-finite values, steps outside
-    /// (0, 360], ranges not 0 <= min < max, noise < 0 or dropout outside [0, 1).
+    /// (0, 360], ranges not 0 <= min < max, noise < 0, intensity noise outside [0, 1] or dropout
+    /// outside [0, 1).
     void validate() const;
     std::size_t rays_per_revolution() const;
 
@@ -44,7 +47,7 @@ struct SensorModel {
     /// beams over the same elevation span; 0.09 deg azimuth step.
     static SensorModel ground_truth();
     /// A ground-truth sensor for any sensor: same elevation span and range, `beams` beams,
-    /// half its azimuth step (at most 0.09 deg), no noise, no dropout.
+    /// half its azimuth step (at most 0.09 deg), no noise (range or intensity), no dropout.
     static SensorModel ground_truth_for(const SensorModel& sensor, int beams = 316);
 
     /// A preset by name: hdl64, vlp16, hdl32, os1-128, gt316. Throws InvalidArgument otherwise.
@@ -52,7 +55,8 @@ struct SensorModel {
     static std::vector<std::string> preset_names();
 
     /// JSON: {"name", "elevations_deg": [...] or "beams" + "elevation_max_deg" + "elevation_min_deg",
-    /// "azimuth_step_deg", "min_range", "max_range", "range_noise", "dropout", "mount_height"};
+    /// "azimuth_step_deg", "min_range", "max_range", "range_noise", "intensity_noise", "dropout",
+    /// "mount_height"};
     /// missing fields keep the defaults above. Throws FormatError on malformed JSON and
     /// InvalidArgument on bad values.
     static SensorModel from_json(std::string_view text);
@@ -68,8 +72,9 @@ struct SensorModel {
 std::optional<BeamPattern> drive_pattern(const std::filesystem::path& path);
 
 /// Casts every ray of one revolution from a sensor at `pose` (sensor-to-world) and returns the
-/// noisy hits in the sensor frame (x forward, y left, z up). Deterministic for a given seed,
-/// whatever the number of threads: the noise of each ray is drawn from its own counter.
+/// noisy hits in the sensor frame (x forward, y left, z up), with their intensities when the scene
+/// knows its reflectivity everywhere a ray hit. Deterministic for a given seed, whatever the number
+/// of threads: the noise of each ray is drawn from its own counter.
 PointCloud simulate_scan(const RayScene& scene, const SensorModel& sensor, const Eigen::Isometry3d& pose,
                          std::uint64_t seed);
 

@@ -30,6 +30,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "lidarsurf/io/point_cloud.hpp"
 #include "lidarsurf/mesh/mesh.hpp"
 #include "lidarsurf/reconstruction_config.hpp"
 
@@ -117,10 +118,10 @@ private:
 /// world frame. `summary`, when given, gets the tile's counts and times.
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
                ReconstructionSummary* summary = nullptr);
-/// The same, `scan(i, no_return)` also giving the directions (world) of scan i's rays that
-/// returned nothing (Reconstructor::integrate).
-Mesh fuse_tile(const TilePlan& plan, const TileKey& tile,
-               const std::function<std::vector<Eigen::Vector3d>(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
+/// The same, `scan(i, no_return)` giving scan i as a cloud (world frame; its intensities, when
+/// it has them, reach the mesh) and the directions (world) of its rays that returned nothing
+/// (Reconstructor::integrate).
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<PointCloud(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
                ReconstructionSummary* summary = nullptr);
 
 /// The mesh of the cubes `tile` owns, from `rec`'s grid (world frame), which must hold every point
@@ -143,7 +144,7 @@ public:
 private:
     struct Key {
         std::array<std::uint64_t, 3> position;    // the coordinates' bits
-        std::array<std::uint32_t, 5> attributes;  // the normal's, the confidence's bits, the level
+        std::array<std::uint32_t, 6> attributes;  // the normal's, the confidence's bits, the level, the intensity's bits
         bool operator==(const Key&) const = default;
     };
     struct KeyHash {

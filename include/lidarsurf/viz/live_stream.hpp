@@ -8,13 +8,15 @@
 //   trajectory: sensor positions (3 float32 each) the client has not had yet, in order;
 //   removed: block keys (3 int32 each) left without a triangle;
 //   changed: blocks, each its key (3 int32), vertex and triangle counts (uint32), the block's
-//     lowest corner (3 float32, relative to the origin), its position step and confidence step
-//     (float32), and the byte lengths (uint32) of its vertices and triangles, both compressed by
-//     meshoptimizer's codecs (each zero-padded to 4 bytes): vertex records of 12 bytes (x, y, z
-//     and confidence as uint16 steps from the corner and from 0, the level as uint8, 3 zero
-//     bytes), and 3 uint32 indices a triangle. The position step is 0.5 mm (the block's extent
-//     / 65535 for a block past 32 m), so positions keep a quarter of a millimetre; the vertices
-//     are in meshoptimizer's order, not the block mesh's (a vertex no triangle uses is left out).
+//     lowest corner (3 float32, relative to the origin), its position step, confidence step,
+//     intensity base and intensity step (float32; a step of -1: the block has no intensity), and
+//     the byte lengths (uint32) of its vertices and triangles, both compressed by meshoptimizer's
+//     codecs (each zero-padded to 4 bytes): vertex records of 12 bytes (x, y, z and confidence as
+//     uint16 steps from the corner and from 0, the level as uint8, a zero byte, the intensity as
+//     uint16 steps from its base, 65535 for none), and 3 uint32 indices a triangle. The position
+//     step is 0.5 mm (the block's extent / 65535 for a block past 32 m), so positions keep a
+//     quarter of a millimetre; intensity keeps 1/65534 of the block's range; the vertices are in
+//     meshoptimizer's order, not the block mesh's (a vertex no triangle uses is left out).
 // Applying a message: drop every block if kReset, then the removed blocks, then put each changed
 // block in place of the one with its key.
 #include <cstdint>
@@ -29,7 +31,7 @@
 
 namespace lidarsurf::live_stream {
 
-inline constexpr std::uint32_t kVersion = 2;
+inline constexpr std::uint32_t kVersion = 3;
 inline constexpr std::size_t kHeaderBytes = 112;
 
 enum Flags : std::uint32_t {
@@ -47,7 +49,7 @@ struct Header {
 };
 
 /// A changed block's part of a message (key, counts, arrays), to be encoded once and sent to
-/// every client. Vertices without levels or confidence get 0. Throws InvalidArgument for a block
+/// every client. Vertices without levels or confidence get 0; a mesh without intensity sends none. Throws InvalidArgument for a block
 /// of more than 65,535 vertices or 131,072 triangles (a block of 8^3 cubes has at most ~2,200
 /// vertices).
 std::string encode_block(const MeshBlock& block, const Eigen::Vector3d& origin);

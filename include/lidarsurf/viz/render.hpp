@@ -1,6 +1,8 @@
 #pragma once
 // Renders a mesh to an image: one Embree ray per pixel from a perspective camera, Lambert shading
-// with a key light and a head light, coloured by height or by the adaptive level k'.
+// with a key light and a head light, coloured by height, by the adaptive level k' or by intensity
+// (a grey ramp over the 2nd-98th percentiles of the vertices' intensity; pale blue where a
+// triangle has none).
 #include <optional>
 #include <string_view>
 
@@ -11,8 +13,8 @@
 
 namespace lidarsurf::viz {
 
-enum class Colouring { Height, Level, Grey };
-Colouring parse_colouring(std::string_view name);  ///< height | level | grey
+enum class Colouring { Height, Level, Grey, Intensity };
+Colouring parse_colouring(std::string_view name);  ///< height | level | grey | intensity
 
 struct RenderConfig {
     int width = 1280, height = 720;
@@ -24,7 +26,8 @@ struct RenderConfig {
     void validate() const;
 };
 
-/// Throws InvalidInput for a mesh without triangles; Colouring::Level needs mesh.levels.
+/// Throws InvalidInput for a mesh without triangles; Colouring::Level needs mesh.levels,
+/// Colouring::Intensity mesh.intensity.
 Image render(const Mesh& mesh, const RenderConfig& config);
 
 }  // namespace lidarsurf::viz
