@@ -182,12 +182,23 @@ Method resolve_method(const ReconstructOptions& o) {
 std::string method_name(const Method& m) { return m.imls ? "imls" : "mode " + std::string(to_string(m.config.mode)); }
 
 // Runs the chosen method; `summary` receives one line of counts and times.
-Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary) {
-    Mesh mesh = reconstruct_with(m, cloud, m.sensor, &summary);
+namespace {
+
+Mesh require_triangles(Mesh mesh, const Method& m, const std::string& summary) {
     if (mesh.empty())
         throw InvalidInput("the reconstruction produced no triangle (" + summary + "); the cloud may be too sparse for n_min=" +
                            format_value(m.config.n_min) + " at voxel size " + format_value(m.config.voxel_size));
     return mesh;
+}
+
+}  // namespace
+
+Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary) {
+    return require_triangles(reconstruct_with(m, cloud, m.sensor, &summary), m, summary);
+}
+
+Mesh run_method(const Method& m, PointCloud&& cloud, std::string& summary) {
+    return require_triangles(reconstruct_with(m, std::move(cloud), m.sensor, &summary), m, summary);
 }
 
 std::FILE* report_stream(const fs::path& output) {

@@ -72,6 +72,8 @@ std::string method_name(const Method& m);
 /// Runs the chosen method; `summary` receives one line of counts and times. InvalidInput when
 /// the reconstruction is empty.
 Mesh run_method(const Method& m, const PointCloud& cloud, std::string& summary);
+/// The same, freeing the cloud once it is integrated.
+Mesh run_method(const Method& m, PointCloud&& cloud, std::string& summary);
 
 /// Where a command's report goes: stderr when `output` is the standard output itself
 /// (`-o /dev/stdout`), so the report does not end up inside the file written there; stdout otherwise.

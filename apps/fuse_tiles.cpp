@@ -3,6 +3,7 @@
 // reads the scans that reach it, is fused and meshed alone, and its mesh is appended to the
 // output (MeshStreamWriter), the seams welded (SeamWelder). Memory holds one tile's grid and mesh,
 // never the map's.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -45,7 +46,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     MeshStreamWriter writer(o.output, in.format, needs_double_coordinates(plan.bounds()));
     SeamWelder welder(plan);
     nlohmann::json per_tile = nlohmann::json::array();
-    std::size_t points = 0, voxels = 0, carved = 0;
+    std::size_t points = 0, voxels = 0, carved = 0, estimate = 0;
     double insert_s = 0, carve_s = 0, tsdf_s = 0, mesh_s = 0, write_s = 0;
     Progress progress("fuse", "tiles", plan.tiles().size(), o.quiet);
     for (std::size_t t = 0; t < plan.tiles().size(); ++t) {
@@ -60,6 +61,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
         points += s.points_read - s.points_dropped;
         voxels += s.voxels;
         carved += s.carved_voxels;
+        estimate = std::max(estimate, s.memory_estimate);
         insert_s += s.seconds_insert, carve_s += s.seconds_carve, tsdf_s += s.seconds_tsdf, mesh_s += s.seconds_mesh;
         per_tile.push_back({{"x", key.x},
                             {"y", key.y},
@@ -67,6 +69,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                             {"voxels", s.voxels},
                             {"triangles", part.triangles.size()},
                             {"ms", fuse_ms},
+                            {"memory_estimate_mib", static_cast<double>(s.memory_estimate) / 1048576.0},
                             {"resident_mib", resident_mib()}});
         progress.update(t + 1, std::to_string(writer.triangles()) + " triangles");
     }
@@ -78,10 +81,11 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     const double total_s = ms_since(start) / 1e3;
     std::fprintf(report,
                  "%s: %zu frames fused in %zu tiles of %g m (%s, poses from %s); mesh %llu vertices %llu triangles; "
-                 "plan %.1f s, tiles %.1f s (insert %.1f, carving %.1f, tsdf %.1f, mesh %.1f), write %.1f s; peak resident %.0f MiB -> %s\n",
+                 "plan %.1f s, tiles %.1f s (insert %.1f, carving %.1f, tsdf %.1f, mesh %.1f), write %.1f s; memory estimate %.0f MiB (largest tile), peak resident %.0f MiB -> %s\n",
                  in.name().c_str(), in.scans.size(), plan.tiles().size(), o.tiles.tile_size, method_name(m).c_str(), in.layout().c_str(),
                  static_cast<unsigned long long>(writer.vertices()), static_cast<unsigned long long>(writer.triangles()), plan_s,
-                 total_s - plan_s - write_s, insert_s, carve_s, tsdf_s, mesh_s, write_s, peak_resident_mib(), o.output.c_str());
+                 total_s - plan_s - write_s, insert_s, carve_s, tsdf_s, mesh_s, write_s, static_cast<double>(estimate) / 1048576.0,
+                 peak_resident_mib(), o.output.c_str());
     if (!o.json.empty()) {
         nlohmann::json j = fuse_report_head(in, m);
         j.update({{"tile_size", o.tiles.tile_size},
@@ -91,6 +95,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                   {"points_integrated", points},
                   {"voxels", voxels},
                   {"carved_voxels", carved},
+                  {"memory_estimate_mib", static_cast<double>(estimate) / 1048576.0},
                   {"seam_vertices", welder.size()},
                   {"mesh_vertices", writer.vertices()},
                   {"mesh_triangles", writer.triangles()},

@@ -59,7 +59,7 @@ int run_reconstruct(const ReconstructCommandOptions& o) {
     }
     const double read_ms = ms_since(t0);
     std::string summary;
-    const Mesh mesh = run_method(m, cloud, summary);
+    const Mesh mesh = run_method(m, std::move(cloud), summary);
     t0 = std::chrono::steady_clock::now();
     write_mesh(mesh, output, mesh_format);
     std::fprintf(report_stream(output), "%s: %s; %s; read %.1f ms, write %.1f ms -> %s\n", from.c_str(), method_name(m).c_str(), summary.c_str(), read_ms,

@@ -248,7 +248,7 @@ Mesh Reconstructor::extract_mesh(const SearchRegion& region, const std::function
 
 void Reconstructor::check_extraction_budget(const SurfaceConfig& config, Evaluation evaluation, const SearchRegion* region) {
     const auto budget = static_cast<std::size_t>(budget_bytes());
-    summary_.memory_estimate = map_bytes() + estimate_extraction_bytes(grid_, config, evaluation, budget, region);
+    summary_.memory_estimate = kProcessBaselineBytes + map_bytes() + estimate_extraction_bytes(grid_, config, evaluation, budget, region);
     if (summary_.memory_estimate > budget)
         throw ResourceLimit(over_budget("the surface extraction", static_cast<double>(summary_.memory_estimate),
                                         format_value(grid_.size()) + " voxels in " + format_value(grid_.index().block_count()) +
@@ -292,61 +292,6 @@ std::string Reconstructor::over_budget(const std::string& what, double bytes, co
     return what + buf + detail + "); use a larger voxel size, split the cloud, or raise the budget (max_memory_mb, CLI --max-memory-mb)";
 }
 
-std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const SurfaceConfig& config, Evaluation evaluation,
-                                      std::size_t limit, const SearchRegion* region) {
-    // The grid's blocks the extraction can reach: all of them, or those within the region's
-    // bounding box grown by the reach of a vertex's neighbourhoods (in blocks, rounded up, plus
-    // one for the region's cubes on a block's last layer).
-    const std::vector<VoxelKey>& keys = grid.index().block_keys();
-    VoxelKey lo = VoxelKey::Constant(std::numeric_limits<int>::min()), hi = VoxelKey::Constant(std::numeric_limits<int>::max());
-    if (region) {
-        lo = VoxelKey::Constant(std::numeric_limits<int>::max()), hi = VoxelKey::Constant(std::numeric_limits<int>::min());
-        for (const VoxelKey& b : region->blocks()) lo = lo.cwiseMin(b), hi = hi.cwiseMax(b);
-        const int grow = (config.max_reach() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize + 1;
-        lo.array() -= grow, hi.array() += grow;
-    }
-    const auto counted = [&](std::size_t b) { return (keys[b].array() >= lo.array()).all() && (keys[b].array() <= hi.array()).all(); };
-    // The blocks, those the surface runs through (3+ voxels), and the voxels.
-    std::size_t blocks = 0, surface_blocks = 0, voxels = 0;
-    for (std::size_t b = 0; b < keys.size(); ++b) {
-        if (!counted(b)) continue;
-        const int n = popcount(grid.occupancy(b));
-        ++blocks;
-        surface_blocks += n >= 3;
-        voxels += static_cast<std::size_t>(n);
-    }
-    // The output mesh: 40-64 vertices per surface block were measured (docs/reliability.md: a
-    // KITTI frame, the demo, 3 M points on 40 planes at 0.05-0.2 m), each with its position,
-    // normal, level and confidence (41 B) and about two triangles' share (24 B); bounded here by
-    // 96 vertices, 6 KiB.
-    const std::size_t mesh = surface_blocks * 6 * 1024;
-    if (config.seeded_surface && evaluation == Evaluation::Fast) {
-        // Measured (docs/reliability.md): the search's visited flags and slots cost about 4 KiB per
-        // voxel block; surface blocks add the field, its samples and the welding table, about
-        // 10 KiB more. Rounded up to 5 and 12 KiB. Plus the packed snapshot of the statistics
-        // (PackedVoxels): one record per voxel and a header per block.
-        return mesh + blocks * 5 * 1024 + surface_blocks * 12 * 1024 + voxels * sizeof(PackedVoxels::Voxel) +
-               blocks * sizeof(PackedVoxels::Block);
-    }
-    // Every vertex within the largest level L of a voxel is a candidate, each costing its key, its
-    // sample and its share of the field (measured ~43 B; 48 B here). Candidates are bounded by the
-    // vertex blocks within ceil(L / 8) blocks of a voxel block, counted until `limit` is passed.
-    constexpr std::size_t kPerBlock = BlockMap<int>::kVolume * 48;
-    const int r = (config.max_level() + BlockMap<int>::kSize - 1) / BlockMap<int>::kSize;
-    BlockIndex dilated;
-    std::size_t count = 0;
-    for (std::size_t b = 0; b < keys.size(); ++b) {
-        if (!counted(b)) continue;
-        for (int z = -r; z <= r; ++z)
-            for (int y = -r; y <= r; ++y)
-                for (int x = -r; x <= r; ++x) {
-                    if (!dilated.try_emplace(VoxelKey(keys[b].x() + x, keys[b].y() + y, keys[b].z() + z), 0).second) continue;
-                    if (mesh + ++count * kPerBlock > limit) return mesh + count * kPerBlock;
-                }
-    }
-    return mesh + count * kPerBlock;
-}
-
 Mesh reconstruct(const PointCloud& cloud, const Eigen::Vector3d& sensor, const ReconstructionConfig& config,
                  ReconstructionSummary* summary) {
     Reconstructor r(config, sensor);
@@ -361,8 +306,13 @@ void MethodConfig::validate() const {
     else config.validate();
 }
 
-Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& sensor,
-                      std::string* summary, std::span<const float> intensity) {
+namespace {
+
+// IMLS or the TSDF on the points `integrate` gives a Reconstructor; `release`, called once they
+// are integrated, may free them before the extraction.
+template <class Integrate>
+Mesh run_method(const MethodConfig& method, const Eigen::Vector3d& sensor, std::string* summary, std::span<const Eigen::Vector3d> points,
+                Integrate integrate) {
     method.validate();
     if (method.imls) {
         PointCloud cloud;  // IMLS keeps its own copy for its kd-tree
@@ -373,10 +323,24 @@ Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3
         return mesh;
     }
     Reconstructor rec(method.config, sensor);
-    rec.integrate(points, intensity);
+    integrate(rec);
     Mesh mesh = rec.extract_mesh();
     if (summary) *summary = rec.summary().to_string();
     return mesh;
+}
+
+}  // namespace
+
+Mesh reconstruct_with(const MethodConfig& method, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& sensor,
+                      std::string* summary, std::span<const float> intensity) {
+    return run_method(method, sensor, summary, points, [&](Reconstructor& rec) { rec.integrate(points, intensity); });
+}
+
+Mesh reconstruct_with(const MethodConfig& method, PointCloud&& cloud, const Eigen::Vector3d& sensor, std::string* summary) {
+    return run_method(method, sensor, summary, cloud.points, [&](Reconstructor& rec) {
+        rec.integrate(cloud.points, cloud.intensities);
+        cloud = PointCloud{};  // the extraction's memory comes in place of the points', not on top of it
+    });
 }
 
 }  // namespace lidarsurf

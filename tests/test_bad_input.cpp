@@ -208,7 +208,7 @@ TEST(BadInput, MemoryBudgetRefusesWithTheEstimate) {
     // A budget the grid fits in but the extraction does not: refused before any TSDF work.
     Reconstructor r(ReconstructionConfig{}, Eigen::Vector3d::Zero());
     r.integrate(demo_scan());
-    const double grid_mb = static_cast<double>(r.grid().memory_bytes()) / 1048576.0;
+    const double grid_mb = static_cast<double>(kProcessBaselineBytes + r.grid().memory_bytes()) / 1048576.0;
     const double extraction_mb = static_cast<double>(estimate_extraction_bytes(r.grid(), r.config(), Evaluation::Fast)) / 1048576.0;
     ASSERT_GT(extraction_mb, 1.0);
     c.max_memory_mb = std::ceil(grid_mb + 0.5 * extraction_mb);
@@ -246,7 +246,7 @@ TEST(BadInput, MemoryBudgetOfAPartCountsThePart) {
     const std::size_t part = estimate_extraction_bytes(grid, r.config(), Evaluation::Fast, SIZE_MAX, &region);
     ASSERT_LT(part, whole / 2) << "the part reaches a fraction of the scan's blocks";
     ReconstructionConfig c;
-    c.max_memory_mb = std::ceil(static_cast<double>(r.map_bytes() + (part + whole) / 2) / 1048576.0);
+    c.max_memory_mb = std::ceil(static_cast<double>(kProcessBaselineBytes + r.map_bytes() + (part + whole) / 2) / 1048576.0);
     Reconstructor tight(c, Eigen::Vector3d::Zero());
     tight.integrate(road);
     expect_error([&] { tight.extract_mesh(); }, Expect::Resource, "the surface extraction would need about", "the whole map over the budget");

@@ -23,6 +23,10 @@
 
 namespace lidarsurf {
 
+/// What a process running the library holds besides its maps: code, libraries, thread stacks
+/// (measured: the CLI on a 1,600-point scan peaks at 15 MiB). Part of every memory estimate.
+inline constexpr std::size_t kProcessBaselineBytes = std::size_t{16} << 20;
+
 struct ReconstructionSummary {
     std::size_t points_read = 0;
     std::size_t points_dropped = 0;  ///< non-finite coordinates
@@ -32,7 +36,7 @@ struct ReconstructionSummary {
     std::size_t defined_vertices = 0;
     std::size_t mesh_vertices = 0;
     std::size_t mesh_triangles = 0;
-    std::size_t memory_estimate = 0;  ///< bytes: the grid plus estimate_extraction_bytes (the budget check)
+    std::size_t memory_estimate = 0;  ///< bytes: kProcessBaselineBytes, the map and estimate_extraction_bytes (the budget check)
     std::size_t carved_voxels = 0;  ///< voxels removed by free-space carving, over all scans
     double seconds_insert = 0, seconds_carve = 0, seconds_tsdf = 0, seconds_mesh = 0;
     /// The TSDF stage by phase, for the fast path with seeded_surface (zero otherwise).
@@ -88,7 +92,7 @@ public:
     void skip_scan();
 
     /// Computes the TSDF and extracts the mesh. Throws InvalidInput if no point was integrated and
-    /// ResourceLimit if the grid plus estimate_extraction_bytes exceeds config.max_memory_mb.
+    /// ResourceLimit if kProcessBaselineBytes, the map and estimate_extraction_bytes exceed config.max_memory_mb.
     ///
     /// Incremental: integrate, extract, integrate more, extract again re-evaluates only the
     /// vertices that the new points can reach (the blocks within max_reach() of a block that
@@ -158,9 +162,11 @@ private:
     ReconstructionSummary summary_;
 };
 
-/// Estimated peak bytes extract_mesh allocates on top of `grid` (search or candidate lists, TSDF
-/// field, welding tables), from the grid's blocks. Calibrated against peak RSS in
-/// docs/reliability.md; errs on the high side. Counting stops once the estimate passes `limit`.
+/// Estimated peak bytes extract_mesh allocates on top of `grid` (the search's voxel lists and
+/// slots, the evaluated vertices, the TSDF field, welding tables, the mesh), from the grid's
+/// blocks: their voxels and their voxels' cube corners (src/extraction_memory.cpp). Calibrated
+/// against peak RSS in docs/reliability.md (0.9-1.45x on the fast path). The reference path's
+/// count stops once the estimate passes `limit`.
 /// With `region` (the fast path's search kept to a part of the map, extract_mesh(region, owns)),
 /// only the grid's blocks within the region's bounding box, grown by the configuration's reach,
 /// are counted: what that search can pack and visit.
@@ -194,5 +200,8 @@ inline Mesh reconstruct_with(const MethodConfig& method, const PointCloud& cloud
                              std::string* summary = nullptr) {
     return reconstruct_with(method, std::span<const Eigen::Vector3d>(cloud.points), sensor, summary, cloud.intensities);
 }
+/// The same, freeing the cloud once it is integrated: the extraction's memory then comes in place
+/// of the input's (the CLI's reconstruct).
+Mesh reconstruct_with(const MethodConfig& method, PointCloud&& cloud, const Eigen::Vector3d& sensor, std::string* summary = nullptr);
 
 }  // namespace lidarsurf
