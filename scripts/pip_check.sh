@@ -3,7 +3,9 @@
 # source tree (pyproject.toml + setup.py, CMake underneath), then installed (1) into a fresh
 # `python3 -m venv --system-site-packages` and (2) for Debian's system Python (into a scratch
 # --target, to leave the machine's site-packages alone). Each install imports lidarsurf, runs the
-# README's Python lines and checks that the mesh arrays are read-only views.
+# README's Python lines and checks that the mesh arrays are read-only views. The check is of the
+# packaging, so the wheel is built at -O1 without LTO (LIDARSURF_CMAKE_ARGS, setup.py), which
+# compiles faster; PIP_CHECK_CMAKE_ARGS= builds it as a user's pip does.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-$root/build/pip-check}
@@ -12,6 +14,7 @@ mkdir -p "$work"
 cd "$work"
 python=/usr/bin/python3
 t0=$(date +%s)
+export LIDARSURF_CMAKE_ARGS=${PIP_CHECK_CMAKE_ARGS-"-DLIDARSURF_LTO=OFF -DCMAKE_CXX_FLAGS_RELEASE='-O1 -DNDEBUG'"}
 "$python" -m pip wheel --no-build-isolation --no-deps -w wheels "$root" >pip-wheel.log 2>&1 || { tail -40 pip-wheel.log; exit 1; }
 wheel=$(ls wheels/lidarsurf-*.whl)
 echo "pip-check: built $(basename "$wheel") in $(( $(date +%s) - t0 )) s"
