@@ -41,8 +41,9 @@ constexpr double kCubeBytes = sizeof(VoxelKey);                         // a cub
 constexpr double kWeldBytes = 32;                                       // marching cubes' welding, per field vertex
 constexpr double kVertexBytes = 45;                                     // a mesh vertex: position, normal, level, confidence, intensity
 constexpr double kTriangleBytes = 12;
-// Evaluated vertices and triangles per seed corner as counted (the far faces counted twice): 0.7-1.2
-// and 0.5-1.9 were measured, the larger between layers 1.5 voxels apart.
+// Evaluated vertices and triangles per seed corner as counted (the far faces counted twice): 0.7-1.8
+// and 0.5-1.9 were measured (the most vertices with bridges at 0.05 m, where the sparse figure
+// below is the larger; the most triangles between layers 1.5 voxels apart).
 constexpr double kEvaluatedPerCorner = 1.0;
 constexpr double kTrianglesPerCorner = 1.9;
 constexpr double kVerticesPerTriangle = 0.6;
@@ -50,7 +51,7 @@ constexpr double kVerticesPerTriangle = 0.6;
 // (5 KiB), and, for a block the surface runs through (3+ voxels), the vertices it evaluates
 // between the seeds (bridges between rings, slabs), the field, the welding and the mesh (16 KiB:
 // 11-17 KiB a block were measured on single scans at 0.05-0.2 m).
-constexpr double kSparseBlockBytes = 5 * 1024;
+constexpr double kSparseBlockBytes = kBlockBytes;
 constexpr double kSparseSurfaceBlockBytes = 16 * 1024;
 
 }  // namespace
