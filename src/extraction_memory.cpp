@@ -85,11 +85,11 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const SurfaceConfig
         // (each voxel is in the lists of the vertex blocks whose region [8b - K, 8b + 6 + K]^3
         // holds it, K = max_level: (7 + 2K)^3 / 8^3 of them on average, all neighbours present),
         // the blocks' slots, the evaluated vertices and the field they are compacted into.
+        const double packed = static_cast<double>(voxels * sizeof(PackedVoxels::Voxel) + blocks * sizeof(PackedVoxels::Block));
         const double side = 7.0 + 2.0 * config.max_level();
         const double evaluated = kEvaluatedPerCorner * static_cast<double>(corners);
         const double field = kFieldBytes * evaluated + kCubeBytes * static_cast<double>(corners);
-        const double search = static_cast<double>(voxels * sizeof(PackedVoxels::Voxel) + blocks * sizeof(PackedVoxels::Block)) +
-                              kListEntryBytes * static_cast<double>(voxels) * side * side * side / 512.0 +
+        const double search = packed + kListEntryBytes * static_cast<double>(voxels) * side * side * side / 512.0 +
                               kBlockBytes * static_cast<double>(blocks) + kStoreBytes * evaluated + field;
         // Then marching cubes, beside the field and the cubes: the mesh and its welding table. The
         // evaluated vertices' store, freed by then, stays counted: glibc keeps its chunks, and the
@@ -99,8 +99,7 @@ std::size_t estimate_extraction_bytes(const VoxelGrid& grid, const SurfaceConfig
                             triangles * (kTriangleBytes + kVerticesPerTriangle * kVertexBytes);
         // Where blocks hold few voxels (single scans: a surface block of a KITTI frame holds ~20),
         // the per-block costs dominate; where they are dense (stacked layers: ~360), the per-voxel ones.
-        const double sparse = kSparseBlockBytes * static_cast<double>(blocks) + kSparseSurfaceBlockBytes * static_cast<double>(surface_blocks) +
-                              static_cast<double>(voxels * sizeof(PackedVoxels::Voxel) + blocks * sizeof(PackedVoxels::Block));
+        const double sparse = packed + kSparseBlockBytes * static_cast<double>(blocks) + kSparseSurfaceBlockBytes * static_cast<double>(surface_blocks);
         return static_cast<std::size_t>(std::max({search, mesh, sparse}));
     }
     // Every vertex within the largest level L of a voxel is a candidate, each costing its key, its
