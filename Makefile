@@ -63,7 +63,7 @@ sanitize: setup
 
 # The parallel code under ThreadSanitizer (third build directory): the tests whose code runs TBB
 # loops (surface search, reference TSDF, free-space carving, IMLS, metrics, map metrics, simulator,
-# renderer, pipeline, the live mesh, the live view's feed and server), linked
+# renderer, pipeline, the live mesh, the live view's feed and server, a group of tiles' reader), linked
 # against Debian's oneTBB source rebuilt with TSan (scripts/build_tbb_tsan.sh: Debian's libtbb is
 # not instrumented, and TSan would report every hand-off between its threads as a race).
 # Left out: the slowest, which run the same parallel code on more data (the four largest, 290 s
@@ -78,7 +78,7 @@ sanitize: setup
 # TSan). The TSan build compiles only the test files of these suites
 # (tests/CMakeLists.txt, LIDARSURF_TSAN_TEST_SOURCES); scripts/check_test_subset.sh checks that it
 # holds every test the filter selects in the full suite of $(BUILD).
-TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*:LiveFeed.*:LiveServer.*$\
+TSAN_FILTER ?= SeededSurface.*:Pipeline.*:FreeSpace.*:MapMetrics.*:Imls.*:Metrics.*:Simulator.*:SensorModel.*:Render.*:Benchmark.*:Holdout.*:MarchingCubes.Parallel*:MarchingCubes.Groups*:LiveMesh.Deltas*:VoxelGrid.BatchInsert*:PackedVoxels.BlocksLeftForLater*:LiveFeed.*:LiveServer.*:Tiles.AGroupReadsTheNextScanWhileItFusesOne$\
   -SeededSurface.FastPathGivesTheReferenceMeshInEveryMode:SeededSurface.FastPathGivesTheReferenceMeshWithDilatedSeeds:Benchmark.PaperClaimsHoldOnATownFrame:Pipeline.AdaptiveGaussianIsMoreAccurateThanImlsOnTheDemo$\
 :FreeSpace.AWalkersPathInFrontOfTheWallIsMostlyCarved:FreeSpace.TheMeshLosesTheTrailAndASingleScanIsUnchanged:FreeSpace.IncrementalMeshesEqualTheOnePassMesh:FreeSpace.ACarThatLeftLosesWhatRaysReachAndOneParkedAllAlongStays:FreeSpace.TheRestOfAMostlyCarvedVanGoesWithIt:FreeSpace.OfTwoCarsParkedSideBySideTheOneThatStaysIsWhole$\
 :Pipeline.ASequenceOrientsEachSideTowardTheSensorThatSawIt:Pipeline.IncrementalExtractionGivesTheMeshOfOneExtraction:Pipeline.ATownDriveFusedFrameByFrameGivesTheOnePassMesh$\

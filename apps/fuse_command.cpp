@@ -83,11 +83,15 @@ CLI::App* add_fuse_command(CLI::App& app, FuseOptions& o) {
         ->type_name("HZ")
         ->capture_default_str();
     f->add_option("--tile-size", o.tiles.tile_size,
-                  "Fuse the map in square tiles of this side (metres, e.g. 100), one after the other: memory follows a tile, "
-                  "not the map, and the mesh, written tile by tile, is the one fused whole (docs/method.md, \"Tiles\"); 0: whole")
+                  "Fuse the map in square tiles of this side (metres, e.g. 100), a group of tiles after the other: memory follows "
+                  "a group, not the map, and the mesh, written tile by tile, is the one fused whole (docs/method.md, \"Tiles\"); 0: whole")
         ->type_name("METRES")
         ->capture_default_str();
     f->add_option("--tile-halo-cubes", o.tiles.halo_cubes, "With --tile-size: the surface search of a tile reaches this many cubes beyond it")
+        ->capture_default_str();
+    f->add_option("--tile-group", o.tiles.group,
+                  "With --tile-size: tiles fused in one pass over the scans, squares of this many tiles a side (each scan read "
+                  "once per group; memory holds a group)")
         ->capture_default_str();
     f->add_option("--json", o.json, "Also write a report: times by stage, and per frame (per tile with --tile-size) the time, voxels and resident memory");
     f->add_flag("-q,--quiet", o.quiet, "No progress report on stderr");

@@ -1,8 +1,8 @@
-// `fuse --tile-size`: the map in tiles (tiles/tiles.hpp), one after the other. A first pass reads
-// every scan once for its reach (where it was seen from, how far its returns go); then each tile
-// reads the scans that reach it, is fused and meshed alone, and its mesh is appended to the
-// output (MeshStreamWriter), the seams welded (SeamWelder). Memory holds one tile's grid and mesh,
-// never the map's.
+// `fuse --tile-size`: the map in tiles (tiles/tiles.hpp). A first pass reads every scan once for
+// its reach (where it was seen from, how far its returns go); a second one reads each scan again,
+// once, for every tile it reaches (fuse_tiles): a tile is fused from its first scan to its last,
+// then meshed and its mesh appended to the output (MeshStreamWriter), the seams welded
+// (SeamWelder). Memory holds the tiles open at once, never the map.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -49,12 +49,8 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     std::size_t points = 0, voxels = 0, carved = 0, estimate = 0;
     double insert_s = 0, carve_s = 0, tsdf_s = 0, mesh_s = 0, write_s = 0;
     Progress progress("fuse", "tiles", plan.tiles().size(), o.quiet);
-    for (std::size_t t = 0; t < plan.tiles().size(); ++t) {
-        const TileKey& key = plan.tiles()[t];
-        const auto t0 = std::chrono::steady_clock::now();
-        ReconstructionSummary s;
-        const Mesh part = fuse_tile(plan, key, read_scan, &s);
-        const double fuse_ms = ms_since(t0);
+    std::size_t done = 0;
+    const TileDone append = [&](const TileKey& key, Mesh&& part, const ReconstructionSummary& s) {
         const auto t1 = std::chrono::steady_clock::now();
         writer.append(part, welder.weld(key, part, writer.vertices()));
         write_s += ms_since(t1) / 1e3;
@@ -68,10 +64,25 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                             {"scans", plan.scans_of(key)},
                             {"voxels", s.voxels},
                             {"triangles", part.triangles.size()},
-                            {"ms", fuse_ms},
+                            {"ms", 1e3 * (s.seconds_insert + s.seconds_carve + s.seconds_tsdf + s.seconds_mesh)},
                             {"memory_estimate_mib", static_cast<double>(s.memory_estimate) / 1048576.0},
                             {"resident_mib", resident_mib()}});
-        progress.update(t + 1, std::to_string(writer.triangles()) + " triangles");
+        progress.update(++done, std::to_string(writer.triangles()) + " triangles");
+    };
+    TilePassStats pass;
+    nlohmann::json per_group = nlohmann::json::array();
+    for (const std::vector<TileKey>& group : plan.groups()) {
+        const auto g0 = std::chrono::steady_clock::now();
+        const double written_before = write_s;
+        const TilePassStats p = fuse_tiles(plan, group, read_scan, append);
+        pass.scans_read += p.scans_read;
+        pass.most_open = std::max(pass.most_open, p.most_open);
+        pass.seconds_read += p.seconds_read;
+        pass.seconds_image += p.seconds_image;
+        nlohmann::json keys = nlohmann::json::array();
+        for (const TileKey& k : group) keys.push_back({k.x, k.y});
+        // What a Dask task of this group does: its pass, without the writing into the one output.
+        per_group.push_back({{"tiles", keys}, {"scans_read", p.scans_read}, {"seconds", ms_since(g0) / 1e3 - (write_s - written_before)}});
     }
     progress.finish(std::to_string(writer.triangles()) + " triangles");
     require_fused_triangles(writer.triangles());
@@ -81,17 +92,21 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     const double total_s = ms_since(start) / 1e3;
     std::fprintf(report,
                  "%s: %zu frames fused in %zu tiles of %g m (%s, poses from %s); mesh %llu vertices %llu triangles; "
-                 "plan %.1f s, tiles %.1f s (insert %.1f, carving %.1f, tsdf %.1f, mesh %.1f), write %.1f s; memory estimate %.0f MiB (largest tile), peak resident %.0f MiB -> %s\n",
+                 "plan %.1f s, tiles %.1f s (read %.1f, range images %.1f, insert %.1f, carving %.1f, tsdf %.1f, mesh %.1f), write %.1f s; "
+                 "memory estimate %.0f MiB (largest tile, %zu tiles at once), peak resident %.0f MiB -> %s\n",
                  in.name().c_str(), in.scans.size(), plan.tiles().size(), o.tiles.tile_size, method_name(m).c_str(), in.layout().c_str(),
                  static_cast<unsigned long long>(writer.vertices()), static_cast<unsigned long long>(writer.triangles()), plan_s,
-                 total_s - plan_s - write_s, insert_s, carve_s, tsdf_s, mesh_s, write_s, static_cast<double>(estimate) / 1048576.0,
-                 peak_resident_mib(), o.output.c_str());
+                 total_s - plan_s - write_s, pass.seconds_read, pass.seconds_image, insert_s, carve_s, tsdf_s, mesh_s, write_s,
+                 static_cast<double>(estimate) / 1048576.0, pass.most_open, peak_resident_mib(), o.output.c_str());
     if (!o.json.empty()) {
         nlohmann::json j = fuse_report_head(in, m);
         j.update({{"tile_size", o.tiles.tile_size},
                   {"tile_halo_cubes", o.tiles.halo_cubes},
+                  {"tile_group", o.tiles.group},
                   {"ray_reach_m", plan.ray_reach()},
                   {"tiles", plan.tiles().size()},
+                  {"tiles_at_once", pass.most_open},
+                  {"scans_read", pass.scans_read},
                   {"points_integrated", points},
                   {"voxels", voxels},
                   {"carved_voxels", carved},
@@ -100,9 +115,10 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                   {"mesh_vertices", writer.vertices()},
                   {"mesh_triangles", writer.triangles()},
                   {"seconds",
-                   {{"plan", plan_s}, {"insert", insert_s}, {"carve", carve_s}, {"tsdf", tsdf_s}, {"mesh", mesh_s}, {"write", write_s}, {"total", total_s}}},
+                   {{"plan", plan_s}, {"read", pass.seconds_read}, {"range_images", pass.seconds_image}, {"insert", insert_s}, {"carve", carve_s}, {"tsdf", tsdf_s}, {"mesh", mesh_s}, {"write", write_s}, {"total", total_s}}},
                   {"peak_resident_mib", peak_resident_mib()},
-                  {"per_tile", per_tile}});
+                  {"per_tile", per_tile},
+                  {"per_group", per_group}});
         write_json(o.json, j);
     }
     return 0;

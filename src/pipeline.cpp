@@ -69,6 +69,16 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eig
 
 void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
                               std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity) {
+    integrate_kept(points, viewpoint, keep, no_return, intensity, nullptr);
+}
+
+void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
+                              const RangeImage& image, std::span<const float> intensity) {
+    integrate_kept(points, viewpoint, keep, {}, intensity, &image);
+}
+
+void Reconstructor::integrate_kept(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
+                                   std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity, const RangeImage* image) {
     if (!intensity.empty() && intensity.size() != points.size())
         throw InvalidArgument("intensity: " + std::to_string(intensity.size()) + " values for " + std::to_string(points.size()) + " points");
     std::vector<Eigen::Vector3d> kept;
@@ -79,18 +89,18 @@ void Reconstructor::integrate(std::span<const Eigen::Vector3d> points, const Eig
             if (!intensity.empty()) kept_intensity.push_back(intensity[i]);
         }
     // summary().points_read counts the points kept.
-    integrate_seen(kept, viewpoint, points, no_return, kept_intensity);
+    integrate_seen(kept, viewpoint, points, no_return, kept_intensity, image);
 }
 
 void Reconstructor::integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint,
                                    std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return,
-                                   std::span<const float> intensity) {
+                                   std::span<const float> intensity, const RangeImage* image) {
     if (!viewpoint.allFinite()) throw InvalidArgument("viewpoint must be finite");
     if (!grid_.has_viewpoints()) {
         grid_.enable_viewpoints(sensor_);  // the points integrated before were seen from the sensor
         if (grid_.point_count() > 0) previous_.reset();  // every orientation may change: evaluate all again
     }
-    add(points, viewpoint, scan, no_return, intensity);
+    add(points, viewpoint, scan, no_return, intensity, image);
     last_viewpoint_ = viewpoint;
 }
 
@@ -114,7 +124,8 @@ MeshDelta Reconstructor::update_mesh(double budget_ms) {
 }
 
 void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
-                        std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity) {
+                        std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity,
+                        const RangeImage* image) {
     if (!intensity.empty() && intensity.size() != points.size())
         throw InvalidArgument("intensity: " + std::to_string(intensity.size()) + " values for " + std::to_string(points.size()) + " points");
     const auto t0 = std::chrono::steady_clock::now();
@@ -160,7 +171,8 @@ void Reconstructor::add(std::span<const Eigen::Vector3d> points, const std::opti
     summary_.seconds_insert += seconds_since(t0);
     if (carving) {
         const auto t1 = std::chrono::steady_clock::now();
-        const CarvingStats carved = arena.execute([&] { return carver_->carve(grid_, scan, hits, *seen_from, no_return); });
+        const CarvingStats carved = arena.execute(
+            [&] { return image ? carver_->carve(grid_, *image, hits) : carver_->carve(grid_, scan, hits, *seen_from, no_return); });
         summary_.carved_voxels += carved.removed;
         summary_.seconds_carve += seconds_since(t1);
     }

@@ -87,6 +87,12 @@ public:
     /// through the part may return outside it). summary().points_read counts the points kept.
     void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
                    std::span<const Eigen::Vector3f> no_return = {}, std::span<const float> intensity = {});
+    /// The same with the scan's range image built already: `image` is RangeImage::build of the
+    /// whole scan `points` from `viewpoint` in this grid's frame (the origin given to the
+    /// constructor) with config.carve_empty_range and the scan's rays that returned nothing. Several
+    /// parts of one map fused in one pass over the scans share it (tiles/tiles.hpp, fuse_tiles).
+    void integrate(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
+                   const RangeImage& image, std::span<const float> intensity = {});
     /// A scan of a sequence that reaches nothing of this grid (a part of a map, tiles/tiles.hpp):
     /// free-space carving counts it, as it counts every scan of the drive.
     void skip_scan();
@@ -132,11 +138,15 @@ public:
 private:
     /// integrate(points, viewpoint) of `points`, taken from the whole scan `scan` (carving sees it).
     void integrate_seen(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3d> scan,
-                        std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity);
+                        std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity, const RangeImage* image = nullptr);
+    /// integrate(points, viewpoint, keep, ...): the points inside `keep`, their intensities too.
+    void integrate_kept(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, const Eigen::AlignedBox3d& keep,
+                        std::span<const Eigen::Vector3f> no_return, std::span<const float> intensity, const RangeImage* image);
     /// Inserts `points`; carving (on) sees `scan`, the whole scan they are taken from, and its rays
-    /// that returned nothing.
+    /// that returned nothing, or its range image `image` when given.
     void add(std::span<const Eigen::Vector3d> points, const std::optional<Eigen::Vector3d>& seen_from,
-             std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return = {}, std::span<const float> intensity = {});
+             std::span<const Eigen::Vector3d> scan, std::span<const Eigen::Vector3f> no_return = {}, std::span<const float> intensity = {},
+             const RangeImage* image = nullptr);
     void ensure_carver();
     double budget_bytes() const;
     std::string over_budget(const std::string& what, double bytes, const std::string& detail) const;

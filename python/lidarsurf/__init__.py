@@ -14,14 +14,14 @@ import os as _os
 
 from ._lidarsurf import (Config, Mesh, MeshDelta, Reconstructor, TileConfig, TilePlan, __version__, decode_live_message, encode_live_message,
                          empty_rays,
-                         RecordingScans, fuse_tile, points_view, read_mesh, read_points, read_poses, read_recording, read_rings, reconstruct,
+                         RecordingScans, fuse_tile, fuse_tile_group, points_view, read_mesh, read_points, read_poses, read_recording, read_rings, reconstruct,
                          rings_from_order,
                          sequence_frames, sequence_reaches, set_simd_level, simd_level, simd_levels, simulate)
 from ._lidarsurf import _evaluate_json, _ring_holdout_json
 
 __all__ = ["Config", "Mesh", "MeshDelta", "Reconstructor", "reconstruct", "read_points", "read_mesh", "read_poses", "read_rings", "evaluate",
            "ring_holdout", "rings_from_order", "simulate", "points_view", "simd_level", "simd_levels", "set_simd_level",
-           "LiveUpdate", "fuse_live", "decode_live_message", "encode_live_message", "TileConfig", "TilePlan", "sequence_frames", "sequence_reaches", "fuse_tile", "fuse_tiles",
+           "LiveUpdate", "fuse_live", "decode_live_message", "encode_live_message", "TileConfig", "TilePlan", "sequence_frames", "sequence_reaches", "fuse_tile", "fuse_tile_group", "fuse_tiles",
            "TileResult", "read_recording", "RecordingScans", "empty_rays", "__version__"]
 
 

@@ -2,8 +2,9 @@
 
     python3 -m lidarsurf.tiles SEQUENCE OUT_DIR --tile-size 100 --scheduler tcp://HOST:8786
 
-Each tile is fused from the scans that reach it and meshed alone, one task per tile; together the
-tiles' meshes are the mesh `lidarsurf fuse` writes for the whole map (docs/method.md, "Tiles").
+Each tile is fused from the scans that reach it and meshed alone, one task per group of tiles (the
+tiles of a group share one pass over the scans); together the tiles' meshes are the mesh
+`lidarsurf fuse` writes for the whole map (docs/method.md, "Tiles").
 """
 import argparse
 import contextlib
@@ -39,8 +40,10 @@ def _reaches(sequence, frames, recording=None):
     return _ls.sequence_reaches(sequence, frames, recording)
 
 
-def _tile(sequence, frames, reaches, config, tiles, key, path, recording=None, mesh_format="auto"):
-    return _ls.fuse_tile(sequence, frames, reaches, config, tiles, tuple(key), path, recording, mesh_format)
+def _group(sequence, frames, reaches, config, tiles, keys, paths, recording=None, mesh_format="auto"):
+    """One task: a group of tiles (`sequence`, `frames` and `recording` are lists for several drives)."""
+    counts, _ = _ls.fuse_tile_group(sequence, frames, reaches, config, tiles, [tuple(k) for k in keys], paths, recording, mesh_format)
+    return counts
 
 
 def _is_recording(path):
@@ -74,10 +77,11 @@ def _write_json(path, data):
 
 
 def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, halo_cubes=32, first=0, frames=0, step=1,
-               plan_chunk=100, retries=2, poses=None, times=None, topic=None, metadata=None, deskew=True, mesh_format="ply"):
+               plan_chunk=100, retries=2, poses=None, times=None, topic=None, metadata=None, deskew=True, mesh_format="ply", group=2):
     """Fuse a sequence (KITTI layout, poses as `lidarsurf fuse` finds them) into a map cut in square
-    tiles of `tile_size` metres, each tile a task on the dask.distributed `client` (a LocalCluster of
-    this machine's cores when None), and write one mesh per tile, out_dir/tile_X_Y.ply, and
+    tiles of `tile_size` metres, each square of `group` x `group` tiles a task on the dask.distributed
+    `client` (a LocalCluster of this machine's cores when None; the tiles of a task share one pass over
+    the scans: group 1 gives the most tasks, a larger group less CPU), and write one mesh per tile, out_dir/tile_X_Y.ply, and
     out_dir/index.json. Returns TileResult(paths, index). `mesh_format` "glb" writes binary glTF
     (tile_X_Y.glb), "glb-draco" Draco-compressed glTF; each tile's file is whole in itself.
 
@@ -93,35 +97,64 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
     read_recording takes them: its scans within the trajectory's span, de-skewed unless `deskew` is
     False; `first`, `frames` and `step` count those scans. Each task reads the recording from its
     start (streamed) up to the scans it needs.
+
+    `sequence` may also be a list of drives of one world frame (directories or recordings), fused
+    one after the other into one map, as `lidarsurf fuse A B` fuses them; `first`, `frames` and
+    `step` apply to each, and `poses` and `times`, when given, are lists with one entry per drive.
     """
     if mesh_format not in _EXTENSIONS:
         raise ValueError(f"mesh_format must be one of {', '.join(_EXTENSIONS)} (got {mesh_format!r})")
     config = config if config is not None else _ls.Config()
-    tiles = _ls.TileConfig(tile_size, halo_cubes)
+    tiles = _ls.TileConfig(tile_size, halo_cubes, group)
     config.validate()
-    recording = None
-    if _is_recording(sequence):
-        recording = {"poses": poses, "times": times, "topic": topic, "metadata": metadata, "deskew": bool(deskew)}
-    elif poses is not None or times is not None or topic is not None or metadata is not None:
-        raise ValueError(f"{sequence}: poses, times, topic and metadata go with a recording (pcap, ROS 1 or 2 bag)")
-    indices = _ls.sequence_frames(sequence, first, frames, step, recording)
+    several = not isinstance(sequence, (str, os.PathLike))
+    drives = [os.fspath(d) for d in sequence] if several else [os.fspath(sequence)]
+    if not drives:
+        raise ValueError("no drive to fuse")
+
+    def per_drive(value):
+        if value is None:
+            return [None] * len(drives)
+        if not several:
+            return [value]
+        if isinstance(value, (str, os.PathLike)) or len(value) != len(drives):
+            raise ValueError("several drives: poses and times are lists with one entry per drive")
+        return list(value)
+
+    drive_poses, drive_times = per_drive(poses), per_drive(times)
+    recordings = []
+    for d, p, t in zip(drives, drive_poses, drive_times):
+        if _is_recording(d):
+            recordings.append({"poses": p, "times": t, "topic": topic, "metadata": metadata, "deskew": bool(deskew)})
+        elif p is not None or t is not None or topic is not None or metadata is not None:
+            raise ValueError(f"{d}: poses, times, topic and metadata go with a recording (pcap, ROS 1 or 2 bag)")
+        else:
+            recordings.append(None)
+    drive_indices = [_ls.sequence_frames(d, first, frames, step, r) for d, r in zip(drives, recordings)]
     with contextlib.ExitStack() as stack:
         if client is None:
             client = stack.enter_context(_local_client())
             if config.threads == 0:  # one tile a core, not every core for each tile
                 config = copy.copy(config)  # by its fields (lidarsurf/__init__.py)
                 config.threads = 1
-        chunks = [indices[i:i + plan_chunk] for i in range(0, len(indices), plan_chunk)]
-        parts = client.gather(client.map(_reaches, [sequence] * len(chunks), chunks, [recording] * len(chunks), retries=retries, pure=False))
+        chunks = [(d, r, ix[i:i + plan_chunk]) for d, r, ix in zip(drives, recordings, drive_indices) for i in range(0, len(ix), plan_chunk)]
+        parts = client.gather(client.map(_reaches, [c[0] for c in chunks], [c[2] for c in chunks], [c[1] for c in chunks],
+                                         retries=retries, pure=False))
         reaches = np.concatenate(parts)
         plan = _ls.TilePlan(reaches, config, tiles)
         os.makedirs(out_dir, exist_ok=True)
         shared = client.scatter(reaches, broadcast=True)
-        keys = plan.tiles
-        paths = [os.path.join(out_dir, f"tile_{x}_{y}.{_EXTENSIONS[mesh_format]}") for x, y in keys]
-        futures = [client.submit(_tile, sequence, indices, shared, config, tiles, key, path, recording, mesh_format, retries=retries, pure=False)
-                   for key, path in zip(keys, paths)]
-        counts = client.gather(futures)
+        groups = plan.groups
+        keys = [key for g in groups for key in g]
+        group_paths = [[os.path.join(out_dir, f"tile_{x}_{y}.{_EXTENSIONS[mesh_format]}") for x, y in g] for g in groups]
+        paths = [path for p in group_paths for path in p]
+        if several:
+            source, indices, recording = drives, drive_indices, recordings
+        else:
+            source, indices, recording = drives[0], drive_indices[0], recordings[0]
+        futures = [client.submit(_group, source, indices, shared, config, tiles, g, p, recording, mesh_format, retries=retries, pure=False)
+                   for g, p in zip(groups, group_paths)]
+        counts = [c for part in client.gather(futures) for c in part]
     for name in os.listdir(out_dir):  # what a killed worker was writing
         if _TEMPORARY.match(name):
             os.remove(os.path.join(out_dir, name))
@@ -134,10 +167,11 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
         entries.append({"tile": list(key), "path": os.path.basename(path), "scans": plan.scans_of(key), **c})
     index = os.path.join(out_dir, "index.json")
     _write_json(index, {
-        "sequence": os.path.abspath(sequence),
-        "frames": len(indices),
+        "sequence": [os.path.abspath(d) for d in drives] if several else os.path.abspath(drives[0]),
+        "frames": sum(len(ix) for ix in drive_indices),
         "tile_size": tiles.tile_size,
         "halo_cubes": tiles.halo_cubes,
+        "group": tiles.group,
         "grid_origin": plan.grid_origin,
         "ray_reach": plan.ray_reach,
         "config": repr(config),
@@ -150,11 +184,13 @@ def fuse_tiles(sequence, out_dir, tile_size=100.0, client=None, config=None, hal
 
 def main(argv=None):
     p = argparse.ArgumentParser(prog="python3 -m lidarsurf.tiles",
-                                description="Fuse a sequence into a map cut in tiles, one Dask task per tile.")
-    p.add_argument("sequence", help="sequence directory (KITTI layout: velodyne/NNNNNN.bin, poses.txt), or a recording")
+                                description="Fuse a sequence into a map cut in tiles, one Dask task per group of tiles.")
+    p.add_argument("sequence", nargs="+", help="sequence directory (KITTI layout: velodyne/NNNNNN.bin, poses.txt), or a recording; "
+                   "several: drives of one world frame fused into one map")
     p.add_argument("out_dir", help="where the tiles' meshes (tile_X_Y.ply or .glb) and index.json go")
     p.add_argument("--tile-size", type=float, default=100.0, help="side of the square tiles, metres (default 100)")
     p.add_argument("--tile-halo-cubes", type=int, default=32, help="cubes a tile's surface search reaches beyond it")
+    p.add_argument("--tile-group", type=int, default=2, help="tiles a side of the squares fused in one task (default 2)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://HOST:8786 (default: a local cluster)")
     p.add_argument("--first", type=int, default=0)
     p.add_argument("--frames", type=int, default=0, help="frames to fuse (0: to the last)")
@@ -171,9 +207,10 @@ def main(argv=None):
         from distributed import Client
         client = Client(a.scheduler)
     try:
-        result = fuse_tiles(a.sequence, a.out_dir, a.tile_size, client=client, halo_cubes=a.tile_halo_cubes, first=a.first,
+        sequence = a.sequence[0] if len(a.sequence) == 1 else a.sequence
+        result = fuse_tiles(sequence, a.out_dir, a.tile_size, client=client, halo_cubes=a.tile_halo_cubes, first=a.first,
                             frames=a.frames, step=a.step, poses=a.poses, times=a.times, topic=a.topic, metadata=a.metadata,
-                            deskew=bool(a.deskew), mesh_format=a.mesh_format)
+                            deskew=bool(a.deskew), mesh_format=a.mesh_format, group=a.tile_group)
     except (ValueError, OSError, MemoryError) as e:
         print(f"lidarsurf.tiles: {e}", file=sys.stderr)
         return 2

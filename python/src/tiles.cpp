@@ -4,6 +4,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 
@@ -107,6 +110,48 @@ struct Sequence {
     Eigen::Vector3d viewpoint(std::size_t n) const { return drive ? Eigen::Vector3d(poses[frames[n]] * drive->origin()) : poses[frames[n]].translation(); }
 };
 
+// Several drives of one world frame fused as one sequence, one after the other (as `lidarsurf fuse
+// A B` takes them): from Python, a sequence and its frames and recording, or lists of them.
+struct Drives {
+    std::vector<std::unique_ptr<Sequence>> drives;
+    std::vector<std::size_t> first;  // the scan of the whole sequence each drive starts at
+    std::size_t scans = 0;
+
+    Drives(const py::object& sequence, const py::object& frames, const py::object& recording) {
+        const bool several = !py::isinstance<py::str>(sequence);
+        const auto dirs = several ? sequence.cast<std::vector<std::string>>() : std::vector<std::string>{sequence.cast<std::string>()};
+        const auto per_drive = several ? frames.cast<std::vector<std::vector<std::size_t>>>()
+                                       : std::vector<std::vector<std::size_t>>{frames.cast<std::vector<std::size_t>>()};
+        std::vector<py::object> sources;
+        if (several && !recording.is_none()) sources = recording.cast<std::vector<py::object>>();
+        else sources.assign(dirs.size(), recording);
+        if (per_drive.size() != dirs.size() || sources.size() != dirs.size())
+            throw InvalidArgument("several drives: one list of frames and one recording (or None) per drive");
+        for (std::size_t d = 0; d < dirs.size(); ++d) {
+            const auto source = RecordingSource::from(sources[d]);
+            py::gil_scoped_release release;
+            first.push_back(scans);
+            drives.push_back(std::make_unique<Sequence>(dirs[d], per_drive[d], source));
+            scans += per_drive[d].size();
+        }
+    }
+    PointCloud cloud(std::size_t n, std::vector<Eigen::Vector3f>* no_return) {
+        const std::size_t d = static_cast<std::size_t>(std::upper_bound(first.begin(), first.end(), n) - first.begin()) - 1;
+        return drives[d]->cloud(n - first[d], no_return);
+    }
+};
+
+// What a tile's task returns: its mesh's counts, its grid's, and the seconds its fusion took.
+py::dict tile_counts(std::size_t triangles, std::size_t vertices, const ReconstructionSummary& s) {
+    py::dict out;
+    out["triangles"] = triangles;
+    out["vertices"] = vertices;
+    out["voxels"] = s.voxels;
+    out["carved_voxels"] = s.carved_voxels;
+    out["seconds"] = s.seconds_insert + s.seconds_carve + s.seconds_tsdf + s.seconds_mesh;
+    return out;
+}
+
 py::array_t<double> reaches_array(const std::vector<ScanReach>& reaches) {
     py::array_t<double> out({static_cast<py::ssize_t>(reaches.size()), kReachColumns});
     auto a = out.mutable_unchecked<2>();
@@ -146,26 +191,30 @@ std::vector<ScanReach> reaches_from(const py::array_t<double, py::array::c_style
 void bind_tiles(py::module_& m) {
     py::class_<TileConfig>(m, "TileConfig",
                            "How a map is cut into tiles (fuse_tiles, `lidarsurf fuse --tile-size`): square tiles of tile_size metres in "
-                           "the world's x-y plane, each searched halo_cubes cubes beyond its edge.")
-        .def(py::init([](double tile_size, int halo_cubes) {
-                 TileConfig c{tile_size, halo_cubes};
+                           "the world's x-y plane, each searched halo_cubes cubes beyond its edge, fused in squares of group x group "
+                           "tiles that share one pass over the scans.")
+        .def(py::init([](double tile_size, int halo_cubes, int group) {
+                 TileConfig c{tile_size, halo_cubes, group};
                  c.validate();
                  return c;
              }),
-             py::arg("tile_size") = TileConfig{}.tile_size, py::arg("halo_cubes") = TileConfig{}.halo_cubes,
+             py::arg("tile_size") = TileConfig{}.tile_size, py::arg("halo_cubes") = TileConfig{}.halo_cubes, py::arg("group") = TileConfig{}.group,
              "Raises ValueError on a bad value.")
         .def_readwrite("tile_size", &TileConfig::tile_size, "Side of the square tiles, metres (CLI --tile-size).")
         .def_readwrite("halo_cubes", &TileConfig::halo_cubes, "Cubes the surface search of a tile reaches beyond it (CLI --tile-halo-cubes).")
+        .def_readwrite("group", &TileConfig::group,
+                       "Tiles fused in one pass over the scans, squares of this many tiles a side: each scan read and seen as a "
+                       "range image once per group, memory holding a group (CLI --tile-group; one Dask task per group).")
         .def("validate", &TileConfig::validate, "Raise ValueError naming the bad field.")
-        .def(py::pickle([](const TileConfig& c) { return py::make_tuple(c.tile_size, c.halo_cubes); },
+        .def(py::pickle([](const TileConfig& c) { return py::make_tuple(c.tile_size, c.halo_cubes, c.group); },
                         [](const py::tuple& t) {
-                            TileConfig c{t[0].cast<double>(), t[1].cast<int>()};
+                            TileConfig c{t[0].cast<double>(), t[1].cast<int>(), t[2].cast<int>()};
                             c.validate();
                             return c;
                         }))
         .def("__repr__", [](const TileConfig& c) {
             std::ostringstream o;
-            o << "TileConfig(tile_size=" << c.tile_size << ", halo_cubes=" << c.halo_cubes << ")";
+            o << "TileConfig(tile_size=" << c.tile_size << ", halo_cubes=" << c.halo_cubes << ", group=" << c.group << ")";
             return o.str();
         });
 
@@ -223,10 +272,20 @@ void bind_tiles(py::module_& m) {
                 return out;
             },
             "The tiles that can own a triangle, as (x, y) keys: tile (x, y) covers [x, x + 1) * tile_size by [y, y + 1) * tile_size.")
+        .def_property_readonly(
+            "groups", [](const TilePlan& p) {
+                std::vector<std::vector<std::pair<int, int>>> out;
+                for (const std::vector<TileKey>& g : p.groups()) {
+                    out.emplace_back();
+                    for (const TileKey& t : g) out.back().emplace_back(t.x, t.y);
+                }
+                return out;
+            },
+            "The tiles in groups of TileConfig.group x group, each fused in one pass over the scans (fuse_tile_group): lists of (x, y) keys.")
         .def(
             "scans_of", [](const TilePlan& p, std::pair<int, int> t) { return p.scans_of({t.first, t.second}); }, py::arg("tile"),
             "How many scans the tile integrates (the others it counts only).")
-        .def_property_readonly("ray_reach", &TilePlan::ray_reach, "The sequence's longest ray, metres: how far beyond its own a tile keeps points.")
+        .def_property_readonly("ray_reach", &TilePlan::ray_reach, "The sequence's longest ray, metres: how far a scan reaches the tiles around it.")
         .def_property_readonly(
             "grid_origin", [](const TilePlan& p) { return std::vector<double>{p.grid_origin().x(), p.grid_origin().y(), p.grid_origin().z()}; },
             "The whole map's lattice origin, which every tile takes.");
@@ -239,7 +298,6 @@ void bind_tiles(py::module_& m) {
             const MeshFormat format = parse_mesh_format(mesh_format);
             std::vector<ScanReach> r = reaches_from(reaches);
             const auto source = RecordingSource::from(recording);
-            py::dict out;
             ReconstructionSummary s;
             std::size_t triangles = 0, vertices = 0;
             {
@@ -254,12 +312,7 @@ void bind_tiles(py::module_& m) {
                 triangles = mesh.triangles.size(), vertices = mesh.vertices.size();
                 if (!output.empty() && triangles > 0) write_mesh(mesh, output, format);
             }
-            out["triangles"] = triangles;
-            out["vertices"] = vertices;
-            out["voxels"] = s.voxels;
-            out["carved_voxels"] = s.carved_voxels;
-            out["seconds"] = s.seconds_insert + s.seconds_carve + s.seconds_tsdf + s.seconds_mesh;
-            return out;
+            return tile_counts(triangles, vertices, s);
         },
         py::arg("sequence"), py::arg("frames"), py::arg("reaches"), py::arg("config"), py::arg("tiles"), py::arg("tile"), py::arg("output"),
         py::arg("recording") = py::none(), py::arg("mesh_format") = "auto",
@@ -267,6 +320,59 @@ void bind_tiles(py::module_& m) {
         "`mesh_format` as write_mesh's: auto, ply, ply-ascii, obj, glb, glb-draco; "
         "nothing for a tile without a triangle): the "
         "task fuse_tiles gives a worker. Returns a dict of counts (triangles, vertices, voxels, carved_voxels) and seconds.");
+
+    m.def(
+        "fuse_tile_group",
+        [](const py::object& sequence, const py::object& frames, const py::array_t<double, py::array::c_style | py::array::forcecast>& reaches,
+           const ReconstructionConfig& config, const TileConfig& tiles, const std::vector<std::pair<int, int>>& group,
+           const std::vector<std::string>& outputs, const py::object& recording, const std::string& mesh_format) {
+            const MeshFormat format = parse_mesh_format(mesh_format);
+            if (outputs.size() != group.size()) throw InvalidArgument("fuse_tile_group: one output per tile");
+            std::vector<ScanReach> r = reaches_from(reaches);
+            Drives drives(sequence, frames, recording);
+            struct Counts {
+                std::size_t triangles = 0, vertices = 0;
+                ReconstructionSummary summary;
+            };
+            std::map<TileKey, Counts> counts;
+            std::map<TileKey, std::string> path;
+            std::vector<TileKey> keys;
+            for (std::size_t i = 0; i < group.size(); ++i) {
+                keys.push_back({group[i].first, group[i].second});
+                path[keys.back()] = outputs[i];
+            }
+            TilePassStats pass;
+            {
+                py::gil_scoped_release release;
+                const TilePlan plan(std::move(r), config, tiles);
+                if (plan.scan_count() != drives.scans) throw InvalidArgument("fuse_tile_group: one reach per frame");
+                const bool empty_rays = config.carve && config.carve_empty_range > 0;
+                pass = fuse_tiles(
+                    plan, keys,
+                    [&](std::size_t n, std::vector<Eigen::Vector3f>& no_return) { return drives.cloud(n, empty_rays ? &no_return : nullptr); },
+                    [&](const TileKey& key, Mesh&& mesh, const ReconstructionSummary& s) {
+                        const std::string& output = path.at(key);
+                        if (!output.empty() && !mesh.triangles.empty()) write_mesh(mesh, output, format);
+                        counts[key] = {mesh.triangles.size(), mesh.vertices.size(), s};
+                    });
+            }
+            py::list out;
+            for (const TileKey& key : keys) {
+                const Counts& c = counts[key];
+                out.append(tile_counts(c.triangles, c.vertices, c.summary));
+            }
+            py::dict stats;
+            stats["scans_read"] = pass.scans_read;
+            stats["seconds_read"] = pass.seconds_read;
+            stats["seconds_range_images"] = pass.seconds_image;
+            return py::make_tuple(out, stats);
+        },
+        py::arg("sequence"), py::arg("frames"), py::arg("reaches"), py::arg("config"), py::arg("tiles"), py::arg("group"), py::arg("outputs"),
+        py::arg("recording") = py::none(), py::arg("mesh_format") = "auto",
+        "Fuse and mesh a group of tiles (TilePlan.groups) in one pass over the scans, each scan read once, and write each tile's mesh "
+        "to its `outputs` path as fuse_tile does: the task fuse_tiles gives a worker. Several drives of one world frame: `sequence` a "
+        "list of them, `frames` a list of their frames, `recording` None or a list (one per drive); `reaches` are theirs, in that order. Returns (a list of fuse_tile's dicts, one per "
+        "tile in `group`'s order; a dict of the pass's scans_read, seconds_read and seconds_range_images).");
 }
 
 }  // namespace lidarsurf

@@ -69,3 +69,14 @@ def test_several_drives_in_tiles_are_the_same_map(drives, triangle_rows):
     bad = subprocess.run([cli, "fuse", str(d / "a"), str(d / "b"), "-o", str(d / "x.ply"), "--poses", str(d / "a" / "poses.txt")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "one drive" in bad.stderr
+
+
+def test_several_drives_on_dask_are_the_same_map(drives, triangle_rows, tmp_path):
+    pytest.importorskip("distributed")
+    cli, d = drives
+    whole = fuse(cli, d, "ab_whole", "a", "b")
+    result = lidarsurf.fuse_tiles([str(d / "a"), str(d / "b")], str(tmp_path / "tiles"), tile_size=30)  # a local cluster
+    tiles = sorted(row for p in result.paths for row in triangle_rows(lidarsurf.read_mesh(p)))
+    assert tiles == triangle_rows(whole), "drive A then drive B, each triangle of their one map in one tile"
+    with pytest.raises(ValueError, match="one entry per drive"):
+        lidarsurf.fuse_tiles([str(d / "a"), str(d / "b")], str(tmp_path / "no"), poses=str(d / "a" / "poses.txt"))

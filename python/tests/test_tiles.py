@@ -1,11 +1,13 @@
-"""lidarsurf.fuse_tiles on a dask.distributed LocalCluster of 2 workers: the tiles' meshes together
-are the mesh `lidarsurf fuse` writes for the whole map (the oracle), and a worker killed while it
-meshes a tile changes nothing of the result."""
+"""lidarsurf.fuse_tiles on a dask.distributed LocalCluster of 2 workers, and on a scheduler and 2
+workers started by their commands: the tiles' meshes together are the mesh `lidarsurf fuse` writes
+for the whole map (the oracle), and a worker killed while it meshes tiles changes nothing of the
+result."""
 import json
 import os
 import pickle
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -37,12 +39,87 @@ def client():
     cluster.close()
 
 
+def _kill_a_busy_worker(client, killed, deadline=60):
+    """SIGKILL the process of a worker while it runs a group of tiles (a task of fuse_tiles)."""
+    end = time.time() + deadline
+    while time.time() < end and not killed:
+        for worker, keys in client.processing().items():
+            if any(str(k).startswith("_group") for k in keys):
+                pid = client.run(os.getpid, workers=[worker])[worker]
+                os.kill(pid, signal.SIGKILL)
+                killed.append(worker)
+                return
+        time.sleep(0.02)
+
+
+@pytest.fixture
+def real_cluster(tmp_path):
+    """A scheduler and 2 single-threaded workers started by their commands on 127.0.0.1, as a batch
+    job (Slurm) starts them; yields the scheduler's address and a client of it."""
+    info = tmp_path / "scheduler.json"
+    # The workers import lidarsurf as this test does, and keep glibc's mmap threshold high (docs/tiles.md).
+    env = dict(os.environ, MALLOC_MMAP_THRESHOLD_=str(64 << 20))
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env}
+    procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                               "--scheduler-file", str(info)], **quiet)]
+    try:
+        deadline = time.time() + 60
+        while not info.exists() and time.time() < deadline:
+            time.sleep(0.1)
+        assert info.exists(), "the scheduler wrote no scheduler file"
+        time.sleep(0.2)  # written whole
+        address = json.loads(info.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        for i in range(2):
+            procs.append(subprocess.Popen(["dask", "worker", address, "--host", "127.0.0.1", "--nthreads", "1", "--nworkers", "1",
+                                           "--no-dashboard", "--local-directory", str(tmp_path / f"worker{i}")], **quiet))
+        c = distributed.Client(address)
+        c.wait_for_workers(2, timeout=60)
+        yield address, c
+        c.close()
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+        for proc in reversed(procs):
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def test_a_cluster_started_by_its_commands_meshes_the_whole_map(drive, real_cluster, tmp_path, triangle_rows):
+    seq, whole = drive
+    address, client = real_cluster
+    out = tmp_path / "tiles"
+    killed = []
+    killer = threading.Thread(target=_kill_a_busy_worker, args=(client, killed))
+    killer.start()
+    # The command line, as a batch job runs it; one task a tile, so that tasks remain when one is killed.
+    run = subprocess.run([sys.executable, "-m", "lidarsurf.tiles", str(seq), str(out), "--tile-size", "30", "--tile-group", "1",
+                          "--scheduler", address], capture_output=True, text=True, timeout=600)
+    killer.join()
+    assert run.returncode == 0, run.stderr
+    assert killed, "a worker was killed while it meshed a tile"
+    with open(out / "index.json") as f:
+        index = json.load(f)
+    paths = [str(out / e["path"]) for e in index["tiles"]]
+    assert len(paths) >= 4
+    tiles = sorted(row for p in paths for row in triangle_rows(lidarsurf.read_mesh(p)))
+    assert tiles == triangle_rows(whole), "the killed worker's task was run again: each triangle of the whole map in one tile"
+    # Nothing half-written stays: the tiles' meshes and the index only.
+    assert sorted(os.listdir(out)) == sorted([e["path"] for e in index["tiles"]] + ["index.json"])
+
+
 def test_the_tiles_are_the_whole_map(drive, client, tmp_path, triangle_rows):
     seq, whole = drive
+    # One task a tile, and one a group of 2 x 2 tiles sharing a pass over the scans (the default).
+    for group in (1, 2):
+        alone = lidarsurf.fuse_tiles(str(seq), str(tmp_path / f"group{group}"), tile_size=30, client=client, group=group)
+        assert len(alone.paths) >= 4, "the drive crosses several tiles"
+        tiles = sorted(row for p in alone.paths for row in triangle_rows(lidarsurf.read_mesh(p)))
+        assert tiles == triangle_rows(whole), f"group {group}: each triangle of the whole map in exactly one tile"
     result = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "tiles"), tile_size=30, client=client)
-    assert len(result.paths) >= 4, "the drive crosses several tiles"
-    tiles = sorted(row for p in result.paths for row in triangle_rows(lidarsurf.read_mesh(p)))
-    assert tiles == triangle_rows(whole), "each triangle of the whole map in exactly one tile"
 
     with open(result.index) as f:
         index = json.load(f)
@@ -98,19 +175,7 @@ def test_a_worker_killed_mid_tile_changes_nothing(drive, client, tmp_path):
     calm = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "calm"), tile_size=30, client=client)
     before = set(client.scheduler_info()["workers"])
     killed = []
-
-    def kill_one_busy_worker():
-        deadline = time.time() + 60
-        while time.time() < deadline and not killed:
-            for worker, keys in client.processing().items():
-                if any(str(k).startswith("_tile") for k in keys):
-                    pid = client.run(os.getpid, workers=[worker])[worker]
-                    os.kill(pid, signal.SIGKILL)
-                    killed.append(worker)
-                    return
-            time.sleep(0.02)
-
-    killer = threading.Thread(target=kill_one_busy_worker)
+    killer = threading.Thread(target=_kill_a_busy_worker, args=(client, killed))
     killer.start()
     result = lidarsurf.fuse_tiles(str(seq), str(tmp_path / "killed"), tile_size=30, client=client)
     killer.join()
@@ -131,8 +196,10 @@ def test_configs_travel_and_bad_plans_are_refused(tmp_path):
     c.mode = "an"
     back = pickle.loads(pickle.dumps(c))
     assert repr(back) == repr(c)
-    t = pickle.loads(pickle.dumps(lidarsurf.TileConfig(tile_size=50, halo_cubes=16)))
-    assert (t.tile_size, t.halo_cubes) == (50, 16)
+    t = pickle.loads(pickle.dumps(lidarsurf.TileConfig(tile_size=50, halo_cubes=16, group=3)))
+    assert (t.tile_size, t.halo_cubes, t.group) == (50, 16, 3)
+    with pytest.raises(ValueError, match="group"):
+        lidarsurf.TileConfig(group=0)
     with pytest.raises(ValueError, match="tile_size"):
         lidarsurf.TileConfig(tile_size=0.1)
     with pytest.raises(ValueError, match="halo_cubes"):

@@ -2,13 +2,20 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <future>
 #include <limits>
+#include <map>
+#include <memory>
 #include <set>
 
 #include "lidarsurf/core/block_map.hpp"
 #include "lidarsurf/core/errors.hpp"
 #include "lidarsurf/core/format_value.hpp"
+#include "lidarsurf/map/carved_clusters.hpp"
+#include "lidarsurf/map/range_image.hpp"
 #include "lidarsurf/pipeline.hpp"
 #include "lidarsurf/surface/seeded_surface.hpp"
 
@@ -33,6 +40,7 @@ Eigen::AlignedBox3d grown_xy(const Eigen::AlignedBox3d& box, double margin) {
 void TileConfig::validate() const {
     if (!std::isfinite(tile_size) || tile_size < 1.0) throw InvalidArgument("tile_size must be finite and >= 1 m, got " + format_value(tile_size));
     if (halo_cubes < 8 || halo_cubes > 1024) throw InvalidArgument("halo_cubes must be in [8, 1024], got " + std::to_string(halo_cubes));
+    if (group < 1 || group > 64) throw InvalidArgument("group must be in [1, 64], got " + std::to_string(group));
 }
 
 ScanReach scan_reach(std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& viewpoint, bool empty_rays) {
@@ -73,6 +81,13 @@ TilePlan::TilePlan(std::vector<ScanReach> scans, const ReconstructionConfig& con
     // A cube in the square depends on the vertices within the search halo, each on the voxels
     // within max_reach; one block more for the blocks that straddle the square's edge.
     dependency_margin_ = alpha * (tile_config_.halo_cubes + config_.max_reach() + 2 * Map::kSize);
+    // Carving a voxel of the dependency box reads, besides the scans' range images (whole), the
+    // plane of the voxel a ray returned in within carve_plane_reach of it, and removes it with
+    // the rest of a cluster: one searched from a voxel carved within the clusters' reach of it
+    // (which read the planes within carve_plane_reach of itself), and that goes only when it
+    // reaches no farther than that from where the search started. Two voxels more.
+    const double reach = CarvedClusters::kReach;
+    crop_margin_ = config_.carve ? reach + std::max(reach, config_.carve_plane_reach) + 2 * alpha : 0.0;
     // The tiles within reach of a point: a vertex is defined within max_reach of a voxel.
     std::set<TileKey> keys;
     const double near = alpha * (config_.max_reach() + 2);
@@ -87,6 +102,17 @@ TilePlan::TilePlan(std::vector<ScanReach> scans, const ReconstructionConfig& con
     std::sort(tiles_.begin(), tiles_.end(), [](const TileKey& a, const TileKey& b) { return std::tie(a.y, a.x) < std::tie(b.y, b.x); });
 }
 
+std::vector<std::vector<TileKey>> TilePlan::groups() const {
+    const int g = tile_config_.group;
+    const auto floor_div = [g](int v) { return v >= 0 ? v / g : -((-v + g - 1) / g); };
+    std::map<std::pair<int, int>, std::vector<TileKey>> by_square;  // (y, x) of the group's square
+    for (const TileKey& t : tiles_) by_square[{floor_div(t.y), floor_div(t.x)}].push_back(t);  // tiles_ is in (y, x) order
+    std::vector<std::vector<TileKey>> out;
+    out.reserve(by_square.size());
+    for (auto& [square, group] : by_square) out.push_back(std::move(group));
+    return out;
+}
+
 TileKey TilePlan::tile_of(const Eigen::Vector3d& world) const {
     const double s = tile_config_.tile_size;
     return {static_cast<int>(std::floor(world.x() / s)), static_cast<int>(std::floor(world.y() / s))};
@@ -99,10 +125,7 @@ Eigen::AlignedBox3d TilePlan::square(const TileKey& t) const {
 
 Eigen::AlignedBox3d TilePlan::dependency(const TileKey& t) const { return grown_xy(square(t), dependency_margin_); }
 
-Eigen::AlignedBox3d TilePlan::crop(const TileKey& t) const {
-    // The planes of the voxels that the rays through the dependency box return in; a voxel more.
-    return grown_xy(dependency(t), ray_reach_ + 2 * config_.voxel_size);
-}
+Eigen::AlignedBox3d TilePlan::crop(const TileKey& t) const { return grown_xy(dependency(t), crop_margin_); }
 
 bool TilePlan::reaches(const TileKey& t, std::size_t scan) const {
     const ScanReach& s = scans_.at(scan);
@@ -125,23 +148,112 @@ Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<st
     return fuse_tile(plan, tile, [&](std::size_t i, std::vector<Eigen::Vector3f>&) { return PointCloud{scan(i)}; }, summary);
 }
 
-Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<PointCloud(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
-               ReconstructionSummary* summary) {
-    Reconstructor rec(plan.config(), plan.sensor(), plan.grid_origin());
-    const Eigen::AlignedBox3d crop = plan.crop(tile);
-    std::vector<Eigen::Vector3f> no_return;
-    for (std::size_t i = 0; i < plan.scan_count(); ++i) {
-        if (!plan.reaches(tile, i)) {
-            rec.skip_scan();
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const TileScans& scan, ReconstructionSummary* summary) {
+    Mesh out;
+    fuse_tiles(plan, std::span<const TileKey>(&tile, 1), scan, [&](const TileKey&, Mesh&& mesh, const ReconstructionSummary& s) {
+        out = std::move(mesh);
+        if (summary) *summary = s;
+    });
+    return out;
+}
+
+TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, const TileScans& scan, const TileDone& done) {
+    using Clock = std::chrono::steady_clock;
+    const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    const ReconstructionConfig& config = plan.config();
+    struct Tile {
+        TileKey key;
+        std::size_t first = 0, last = 0;  // the first and last scans that reach it
+        Eigen::AlignedBox3d crop;
+        std::unique_ptr<Reconstructor> rec;
+    };
+    std::vector<Tile> open;  // every tile some scan reaches, until it is meshed
+    for (const TileKey& key : tiles) {
+        Tile t{key, plan.scan_count(), 0, plan.crop(key), nullptr};
+        for (std::size_t i = 0; i < plan.scan_count(); ++i)
+            if (plan.reaches(key, i)) t.first = std::min(t.first, i), t.last = i;
+        if (t.first == plan.scan_count()) done(key, Mesh{}, ReconstructionSummary{});
+        else open.push_back(std::move(t));
+    }
+    TilePassStats stats;
+    RangeImage image;
+    Eigen::Vector3d origin = plan.grid_origin();
+    const double budget = config.max_memory_mb * 1048576.0;
+    // The scans some tile of the group takes, each read once, the next one while this one is fused.
+    struct Read {
+        PointCloud cloud;
+        std::vector<Eigen::Vector3f> no_return;
+        double seconds = 0;
+    };
+    std::vector<std::size_t> needed;
+    for (std::size_t i = 0; i < plan.scan_count(); ++i)
+        if (std::any_of(open.begin(), open.end(), [&](const Tile& t) { return plan.reaches(t.key, i); })) needed.push_back(i);
+    const auto read = [&scan, &seconds_since](std::size_t i) {
+        Read r;
+        const auto t0 = Clock::now();
+        r.cloud = scan(i, r.no_return);
+        r.seconds = seconds_since(t0);
+        return r;
+    };
+    std::size_t next_read = 0;
+    std::future<Read> reading;
+    if (!needed.empty()) reading = std::async(std::launch::async, read, needed[next_read++]);
+    for (std::size_t i = 0; i < plan.scan_count() && !open.empty(); ++i) {
+        bool wanted = false;
+        for (Tile& t : open) {
+            if (t.first > i) continue;
+            if (!t.rec) {  // opened at its first scan: the ones before it are counted
+                t.rec = std::make_unique<Reconstructor>(config, plan.sensor(), plan.grid_origin());
+                for (std::size_t k = 0; k < i; ++k) t.rec->skip_scan();
+                origin = t.rec->grid().origin();  // the lattice point every tile's grid takes
+            }
+            wanted = wanted || plan.reaches(t.key, i);
+        }
+        stats.most_open = std::max(stats.most_open, static_cast<std::size_t>(std::count_if(open.begin(), open.end(), [](const Tile& t) { return t.rec != nullptr; })));
+        if (!wanted) {
+            for (Tile& t : open)
+                if (t.rec) t.rec->skip_scan();
             continue;
         }
-        no_return.clear();
-        const PointCloud cloud = scan(i, no_return);
-        rec.integrate(cloud.points, plan.viewpoint(i), crop, no_return, cloud.intensities);
+        const Read current = reading.get();
+        if (next_read < needed.size()) reading = std::async(std::launch::async, read, needed[next_read++]);
+        const PointCloud& cloud = current.cloud;
+        const std::vector<Eigen::Vector3f>& no_return = current.no_return;
+        stats.seconds_read += current.seconds;
+        ++stats.scans_read;
+        const Eigen::Vector3d& viewpoint = plan.viewpoint(i);
+        if (config.carve) {
+            const auto t1 = Clock::now();
+            image.build(origin, cloud.points, viewpoint, no_return, config.carve_empty_range);
+            stats.seconds_image += seconds_since(t1);
+        }
+        std::size_t held = 0;
+        for (Tile& t : open) {
+            if (!t.rec) continue;
+            if (!plan.reaches(t.key, i)) t.rec->skip_scan();
+            else if (config.carve) t.rec->integrate(cloud.points, viewpoint, t.crop, image, cloud.intensities);
+            else t.rec->integrate(cloud.points, viewpoint, t.crop, no_return, cloud.intensities);
+            held += t.rec->map_bytes();
+        }
+        if (static_cast<double>(kProcessBaselineBytes + held + image.memory_bytes()) > budget) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "the tiles fused at once would need about %.0f MiB, above the memory budget of %.0f MiB",
+                          static_cast<double>(kProcessBaselineBytes + held + image.memory_bytes()) / 1048576.0, config.max_memory_mb);
+            throw ResourceLimit(std::string(buf) + "; use smaller tiles or groups (tile_size, group; CLI --tile-size, --tile-group) or raise the budget (max_memory_mb, CLI --max-memory)");
+        }
+        for (auto it = open.begin(); it != open.end();) {
+            if (it->last != i) {
+                ++it;
+                continue;
+            }
+            Mesh mesh = mesh_tile(*it->rec, plan, it->key);
+            const ReconstructionSummary summary = it->rec->summary();
+            const TileKey key = it->key;
+            it = open.erase(it);  // the tile's grid is freed before the next one is handed over
+            done(key, std::move(mesh), summary);
+        }
     }
-    Mesh mesh = mesh_tile(rec, plan, tile);
-    if (summary) *summary = rec.summary();
-    return mesh;
+    return stats;
 }
 
 Mesh mesh_tile(Reconstructor& rec, const TilePlan& plan, const TileKey& tile) {

@@ -122,7 +122,13 @@ expect 0 "frames fused in" -- "$cli" fuse "$seq" -o "$dir/tiled.obj" --tile-size
 check "fuse --tile-size writes OBJ too" -- test "$(grep -c '^f ' "$dir/tiled.obj")" -gt 1000
 check "fuse --tile-size leaves no temporary" -- test -z "$(ls -a "$dir" | grep -E 'parts|\.tmp\.')"
 grep -q '"per_tile"' "$dir/tiled.json" || { echo "FAIL: fuse --tile-size --json has no per_tile"; fail=$((fail + 1)); }
+expect 0 "frames fused in [0-9]+ tiles of 20 m" -- "$cli" fuse "$seq" -o "$dir/tiled1.ply" --tile-size 20 --tile-group 1
+check "fuse --tile-size in groups of one tile writes the same counts" -- \
+  test "$(head -c 600 "$dir/tiled1.ply" | grep -a '^element')" = "$(head -c 600 "$dir/fused_plain.ply" | grep -a '^element')"
+expect 5 "memory budget" -- "$cli" fuse "$seq" -o "$dir/budget.ply" --tile-size 20 --max-memory 17
+check "a map in tiles over the memory budget writes nothing" -- test ! -e "$dir/budget.ply"
 expect 2 "tile_size" -- "$cli" fuse "$seq" -o "$dir/x.ply" --tile-size 0.5
+expect 2 "group" -- "$cli" fuse "$seq" -o "$dir/x.ply" --tile-size 20 --tile-group 0
 expect 2 "not with --live" -- "$cli" fuse "$seq" -o "$dir/x.ply" --tile-size 50 --live
 expect 2 "seeded surface" -- "$cli" fuse "$seq" -o "$dir/x.ply" --tile-size 50 --method paper
 # The live view (fuse --serve): the mesh written is fuse's; after the drive the final map stays

@@ -5,6 +5,7 @@
 // its points.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -78,6 +79,37 @@ Tiled tiled_map(const TilePlan& plan, const std::vector<test::Scan>& drive) {
     for (const TileKey& t : plan.tiles()) out.append(welder, t, fuse_tile(plan, t, [&](std::size_t i) { return drive[i].points; }));
     return out;
 }
+// The tiles fused group by group (TileConfig::group), each group in one pass over the scans that
+// shares their reading and range images; each scan read once per group.
+Tiled grouped_map(const TilePlan& plan, const std::vector<test::Scan>& drive) {
+    Tiled out;
+    SeamWelder welder(plan);
+    std::size_t handed = 0, reads = 0;
+    for (const std::vector<TileKey>& group : plan.groups()) {
+        std::vector<std::size_t> read(drive.size(), 0);
+        const TilePassStats stats = fuse_tiles(
+            plan, group,
+            [&](std::size_t i, std::vector<Eigen::Vector3f>&) {
+                ++read[i];
+                return PointCloud{drive[i].points};
+            },
+            [&](const TileKey& t, Mesh&& part, const ReconstructionSummary&) {
+                EXPECT_TRUE(std::find(group.begin(), group.end(), t) != group.end());
+                out.append(welder, t, part);
+                ++handed;
+            });
+        for (std::size_t i = 0; i < drive.size(); ++i) {
+            const bool wanted = std::any_of(group.begin(), group.end(), [&](const TileKey& t) { return plan.reaches(t, i); });
+            EXPECT_EQ(read[i], wanted ? 1u : 0u) << "scan " << i << ": read once for its group when a tile of it takes it";
+            reads += read[i];
+        }
+        EXPECT_EQ(stats.scans_read, static_cast<std::size_t>(std::count_if(read.begin(), read.end(), [](std::size_t n) { return n > 0; })));
+        EXPECT_LE(stats.most_open, group.size());
+    }
+    EXPECT_EQ(handed, plan.tiles().size()) << "every tile handed over once";
+    EXPECT_GT(reads, 0u);
+    return out;
+}
 // One map, meshed tile by tile (what `fuse` writes: tile_writer.hpp).
 Tiled tiles_of(Reconstructor& rec, const TilePlan& plan) {
     Tiled out;
@@ -90,6 +122,7 @@ void expect_tiles_equal_the_whole_map(const std::vector<test::Scan>& drive, cons
                                       const ReconstructionConfig& config = {}) {
     const TilePlan plan = plan_of(drive, config, tiles);
     ASSERT_GE(plan.tiles().size(), min_tiles);
+    EXPECT_LT(plan.groups().size(), plan.tiles().size()) << "groups of several tiles";
     const std::unique_ptr<Reconstructor> rec = whole_map(drive, config);
     const Mesh whole = rec->extract_mesh();
     ASSERT_GT(whole.triangles.size(), 10000u);
@@ -111,6 +144,7 @@ void expect_tiles_equal_the_whole_map(const std::vector<test::Scan>& drive, cons
     EXPECT_TRUE(test::triangles_of(file) == test::triangles_of(whole_file)) << "one map written in tiles: the same triangles";
     const Tiled tiled = tiled_map(plan, drive);
     expect_whole(tiled.mesh, "tiles");
+    expect_whole(grouped_map(plan, drive).mesh, "tiles in groups");
     std::size_t with_triangles = 0;
     for (const auto& [key, part] : tiled.parts) {
         with_triangles += !part.triangles.empty();
@@ -128,8 +162,21 @@ void expect_tiles_equal_the_whole_map(const std::vector<test::Scan>& drive, cons
 
 TEST(Tiles, TheTilesMeshIsTheWholeMapsMesh) {
     TileConfig tiles;
-    tiles.tile_size = 30;
+    tiles.tile_size = 30;  // groups of 2 x 2 tiles
     expect_tiles_equal_the_whole_map(test::town_drive(), tiles, 5);
+}
+
+TEST(Tiles, AGroupReadsTheNextScanWhileItFusesOne) {
+    // Two scans of the town: the group's pass reads on a thread of its own (and ThreadSanitizer
+    // watches it: Makefile, TSAN_FILTER); its tiles are still the map fused whole.
+    const std::vector<test::Scan> drive(test::town_drive().begin(), test::town_drive().begin() + 2);
+    TileConfig tiles;
+    tiles.tile_size = 30;
+    const TilePlan plan = plan_of(drive, ReconstructionConfig{}, tiles);
+    ASSERT_LT(plan.groups().size(), plan.tiles().size());
+    const Mesh whole = whole_map(drive, ReconstructionConfig{})->extract_mesh();
+    ASSERT_GT(whole.triangles.size(), 1000u);
+    EXPECT_TRUE(test::triangles_of(grouped_map(plan, drive).mesh) == test::triangles_of(whole));
 }
 
 TEST(Tiles, SimplifiedTilesKeepTheirSeamsClosed) {
@@ -167,11 +214,18 @@ TEST(Tiles, ScansThatCannotReachATileAreCountedNotIntegrated) {
         revisited += runs > 1;
     }
     EXPECT_GE(revisited, 2u);
+    // Every tile in one pass: tiles opened at their first scan, some left and come back to while
+    // others are open, each meshed after its last scan.
+    tiles.group = 64;
+    std::size_t largest = 0;
+    for (const auto& group : plan_of(drive, config, tiles).groups()) largest = std::max(largest, group.size());
+    ASSERT_GE(largest, 4u);
     expect_tiles_equal_the_whole_map(drive, tiles, 7, config);
 }
 
 TEST(Tiles, BadPlansAreRefused) {
-    for (const TileConfig& bad : {TileConfig{0.5, 32}, TileConfig{std::nan(""), 32}, TileConfig{100, 2}, TileConfig{100, 2000}})
+    for (const TileConfig& bad : {TileConfig{0.5, 32}, TileConfig{std::nan(""), 32}, TileConfig{100, 2}, TileConfig{100, 2000},
+                                  TileConfig{100, 32, 0}, TileConfig{100, 32, 65}})
         EXPECT_THROW(bad.validate(), InvalidArgument);
     ReconstructionConfig filtered;
     filtered.min_component_triangles = 10;

@@ -23,8 +23,10 @@
 //  - any voxel (a planar one only while young: the rays grazing a static edge pass through its
 //    ellipsoid): the ray passes within two sigmas of the mean (Mahalanobis) and returns at least
 //    `margin` beyond it, and the voxel lies at least `margin` off the surface the ray returned
-//    on: the plane of the return's voxel, else the normal of the range image at the return, else
-//    the horizontal plane through the return. A far ring on the ground lies on the ground the
+//    on: the plane of the return's voxel (for a voxel within `plane_reach` of the return: a
+//    plane says little far from where it was fitted, and a part of the map fused alone holds
+//    the voxels near it only), else the normal of the range image at the return, else the
+//    horizontal plane through the return. A far ring on the ground lies on the ground the
 //    ray returned on; a car's trail does not.
 //
 // A ray that returned nothing (the sensor says which: a recording's empty pixels, a simulated
@@ -39,9 +41,7 @@
 // height): the remnant of a cluster mostly carved goes with it (map/carved_clusters.hpp,
 // `cluster_share`).
 #include <cstdint>
-#include <optional>
 #include <span>
-#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -49,6 +49,7 @@
 #include "lidarsurf/core/setting.hpp"
 #include "lidarsurf/core/voxel_grid.hpp"
 #include "lidarsurf/map/carved_clusters.hpp"
+#include "lidarsurf/map/range_image.hpp"
 
 namespace lidarsurf {
 
@@ -64,7 +65,8 @@ namespace lidarsurf {
     X(int, carve_stale_scans, 6, 0, 65535, kClosed, kKeep, "carve stale scans", "", "", "Carving: a planar voxel no scan has hit for this many scans is tested by the returns near it, not only by its plane, as a surface that stood and is gone (0 = never)") \
     X(int, carve_stale_passes, 6, 0, 65535, kClosed, kKeep, "carve stale passes", "", "", "Carving: a voxel no scan has hit for carve_stale_scans scans is removed after this many passes since its last hit, however many hits came before (0 = never)") \
     X(double, carve_empty_range, 40.0, 0, 1e4, kClosed, kKeep, "carve empty range", "m", "", "Carving: a ray that returned nothing saw free space up to this distance (metres; 0 = rays that return nothing say nothing), when the input says which rays those were") \
-    X(double, carve_cluster_share, 0.5, 0, 1, kAboveLow, kKeep, "carve cluster share", "", "", "Carving: a cluster above the ground goes whole when at least this share of it was carved (1 = never)")
+    X(double, carve_cluster_share, 0.5, 0, 1, kAboveLow, kKeep, "carve cluster share", "", "", "Carving: a cluster above the ground goes whole when at least this share of it was carved (1 = never)") \
+    X(double, carve_plane_reach, 8.0, 0, 1e4, kClosed, kKeep, "carve plane reach", "m", "", "Carving: the plane of the voxel a ray returned in places that surface for the voxels within this distance of the return (metres); farther, the range image's normal does")
 // clang-format on
 
 struct CarvingConfig {
@@ -99,6 +101,10 @@ public:
     /// when the input does not say.
     CarvingStats carve(VoxelGrid& grid, std::span<const Eigen::Vector3d> points, std::span<const VoxelGrid::Hit> hits,
                        const Eigen::Vector3d& viewpoint, std::span<const Eigen::Vector3f> no_return = {});
+    /// The same with the scan's range image built already (RangeImage::build with this grid's
+    /// origin, carve_empty_range and the scan's points, which must still be alive): what a map
+    /// fused in tiles does, one image per scan for all its tiles.
+    CarvingStats carve(VoxelGrid& grid, const RangeImage& image, std::span<const VoxelGrid::Hit> hits);
 
     /// Counts `scans` scans that reach none of the grid's voxels (none of their returns, and
     /// so no ray, comes within their range of one): what carve() would do with them, without the
@@ -112,12 +118,11 @@ public:
     /// Scans counted so far.
     std::uint32_t scans() const { return scan_; }
     std::size_t memory_bytes() const {
-        return evidence_.capacity() * sizeof(Evidence) + young_.capacity() * sizeof(VoxelKey) +
-               (pixel_of_.capacity() + nearest_.capacity() + young_slots_.capacity() + empty_ray_.capacity()) * sizeof(std::uint32_t) +
-               (depth_.capacity() + elevation_.capacity() + range2_.capacity()) * sizeof(float) + empty_.capacity() +
-               empty_points_.capacity() * sizeof(Eigen::Vector3d) + empty_seen_.capacity() * sizeof(std::pair<std::size_t, float>) +
-               clusters_.memory_bytes();
+        return image_.memory_bytes() + evidence_.capacity() * sizeof(Evidence) + young_.capacity() * sizeof(VoxelKey) +
+               young_slots_.capacity() * sizeof(std::uint32_t) + clusters_.memory_bytes();
     }
+    /// carve_empty_range, the range a RangeImage built for this carver takes.
+    double empty_range() const { return empty_range_; }
 
     /// The evidence of voxel `voxel` (an index into the grid's stats()).
     std::uint16_t hit_scans(std::size_t voxel) const { return evidence_.at(voxel).hits; }
@@ -142,13 +147,9 @@ private:
     Eigen::Matrix3d covariance(const VoxelStats& stats, const Evidence& e) const;
     bool crosses_plane(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
     bool passes_near(const VoxelStats& stats, const Evidence& e, const Eigen::Vector3d& s, const Eigen::Vector3d& p) const;
-    /// `p`: the return of `pixel`, local frame.
-    bool off_surface(const VoxelGrid& grid, std::span<const Eigen::Vector3d> points, const Eigen::Vector3d& mu, const Eigen::Vector3d& p,
-                     std::uint32_t pixel) const;
-    /// Marks the pixels the rays in `no_return` fall in and no return does; gives each empty one
-    /// whose row neighbours are empty too a return at empty_range_ (empty_points_). Returns how many.
-    std::size_t empty_pixels(const Eigen::Vector3d& s, std::span<const Eigen::Vector3f> no_return);
-    std::optional<Eigen::Vector3d> image_normal(std::span<const Eigen::Vector3d> points, std::uint32_t pixel) const;
+    /// `p`: the return of pixel `q` of `image`, local frame.
+    bool off_surface(const VoxelGrid& grid, const RangeImage& image, const Eigen::Vector3d& mu, const Eigen::Vector3d& p,
+                     std::uint32_t q) const;
 
     double margin_;
     int min_scans_;
@@ -156,23 +157,13 @@ private:
     int stale_scans_;
     int stale_passes_;
     double empty_range_;
+    double plane_reach2_;  // carve_plane_reach squared
     double sigma2_;  // sigma0^2, set from the grid's voxel size
     std::uint32_t scan_ = 0;
-    int rows_ = 0;  // rows of the range image of the scan being carved
-    float el_min_ = 0;  // the elevation of its first row (degrees)
-    std::size_t real_ = 0;  // its points: a nearest_ at or above this is an empty pixel's return
     std::vector<Evidence> evidence_;  // per voxel of the grid, by its index
     std::vector<VoxelKey> young_;            // the voxels hit by at most kYoungHits scans (keys: removals move indices)
     std::vector<std::uint32_t> young_slots_;  // their indices in this scan
-    // The range image, kept from scan to scan (no page faults for fresh buffers).
-    std::vector<std::uint32_t> pixel_of_, nearest_;
-    std::vector<float> depth_, elevation_, range2_;  // per pixel; per point (elevation, squared range)
-    // Rays that returned nothing: per pixel, whether one fell in it; the returns given to the
-    // empty pixels (local frame), indexed by nearest_ - the scan's point count.
-    std::vector<std::uint8_t> empty_;
-    std::vector<std::uint32_t> empty_ray_;  // per pixel, the first such ray in it
-    std::vector<std::pair<std::size_t, float>> empty_seen_;  // the empty pixels kept, and how far their rays saw (squared)
-    std::vector<Eigen::Vector3d> empty_points_;
+    RangeImage image_;  // the scan being carved (kept from scan to scan: no page faults for fresh buffers)
     CarvedClusters clusters_;
 };
 

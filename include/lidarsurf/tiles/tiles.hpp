@@ -1,8 +1,8 @@
 #pragma once
-// A map fused in square tiles (docs/method.md, "Tiles"): each tile is fused alone, from the scans
-// that can reach what it depends on, and meshed alone; the tiles' meshes together are the mesh
-// of the map fused whole. Memory follows a tile, not the map; tiles can run one after the other
-// (`fuse --tile-size`) or on many machines (the Python module's fuse_tiles, on Dask).
+// A map fused in square tiles (docs/method.md, "Tiles"): each tile is fused from the scans that
+// can reach what it depends on and meshed alone; the tiles' meshes together are the mesh of the
+// map fused whole. Memory follows a group of tiles, not the map; the groups can run one after the
+// other (`fuse --tile-size`) or on many machines (the Python module's fuse_tiles, on Dask).
 //
 // Why a tile's mesh is the whole map's, cube for cube:
 //  - every cube belongs to one tile, the one holding its centre (x-y, world frame);
@@ -10,14 +10,17 @@
 //    max_reach() of them, and on the surface search reaching it: the tile searches its own cubes
 //    and `halo_cubes` beyond them. The tile's dependency box (its own cubes, the halo and the
 //    reach) holds the statistics of every point of every scan falling in it;
-//  - free-space carving removes a voxel by the rays passing through it: a tile integrates every
-//    point within the dependency box plus the sequence's longest ray (the planes of the voxels
-//    the rays return in are looked up), and carves with every scan whose returns come within its
-//    range of that box, whole. The other scans are counted (staleness is counted in scans);
+//  - free-space carving removes a voxel by the rays passing through it, tested against each
+//    scan's range image (map/range_image.hpp: it depends on the scan alone, so a group of tiles
+//    builds it once per scan), and reads the plane of the voxel a ray returned in within
+//    carve_plane_reach, and the clusters within CarvedClusters::kReach: a tile integrates every
+//    point within its crop (the dependency box grown by those reaches) and carves with every scan
+//    whose returns come within its range of that box. The other scans are counted (staleness is
+//    counted in scans);
 //  - every tile takes the whole map's lattice origin, so the statistics agree to the last bit.
-// A voxel beyond the crop that carving would have removed, and whose plane a ray returning in it
-// would have read, is the one thing a tile cannot see; tests/tiles/test_tiles.cpp compares the
-// tiles with the whole map on drives crossing several tiles.
+// A voxel beyond the crop whose own carving would have changed what a voxel inside reads is the
+// one thing a tile cannot see; tests/tiles/test_tiles.cpp compares the tiles with the whole map
+// on drives crossing several tiles.
 #include <array>
 #include <compare>
 #include <cstdint>
@@ -42,7 +45,11 @@ struct ReconstructionSummary;
 struct TileConfig {
     double tile_size = 100.0;  ///< metres: the side of the square tiles, in the world's x-y plane
     int halo_cubes = 32;       ///< the surface search of a tile reaches this many cubes beyond it
-    /// Throws InvalidArgument naming the field: tile_size finite and >= 1 m, halo_cubes in [8, 1024].
+    /// Tiles fused in one pass over the scans (fuse_tiles): squares of group x group tiles, each
+    /// scan read and seen as a range image once per group; memory holds a group's tiles.
+    int group = 2;
+    /// Throws InvalidArgument naming the field: tile_size finite and >= 1 m, halo_cubes in [8, 1024],
+    /// group in [1, 64].
     void validate() const;
 };
 
@@ -76,6 +83,9 @@ public:
 
     /// The tiles that can own a triangle: those within reach of a point, in (y, x) order.
     const std::vector<TileKey>& tiles() const { return tiles_; }
+    /// The tiles in groups of TileConfig::group x group (fuse_tiles' passes), each in (y, x) order,
+    /// the groups in the (y, x) order of their squares.
+    std::vector<std::vector<TileKey>> groups() const;
     /// The tile whose square holds `world` (x-y).
     TileKey tile_of(const Eigen::Vector3d& world) const;
     /// Whether scan `scan` must be integrated into `tile` (else it is counted only).
@@ -93,7 +103,7 @@ public:
     const Eigen::Vector3d& sensor() const { return scans_.front().viewpoint; }
     /// Where scan `scan` was seen from.
     const Eigen::Vector3d& viewpoint(std::size_t scan) const { return scans_.at(scan).viewpoint; }
-    /// The sequence's longest ray, metres: how far beyond the dependency box a tile keeps points.
+    /// The sequence's longest ray, metres (a scan reaches the tiles within its own farthest return).
     double ray_reach() const { return ray_reach_; }
     /// The box of every scan's points.
     const Eigen::AlignedBox3d& bounds() const { return bounds_; }
@@ -108,21 +118,44 @@ private:
     Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
     double ray_reach_ = 0;
     double dependency_margin_ = 0;  // metres around the square
+    double crop_margin_ = 0;        // metres around the dependency box
     Eigen::AlignedBox3d bounds_;
     std::vector<TileKey> tiles_;
 };
 
-/// Fuses and meshes one tile of `plan`: scans in order, `scan(i)` giving scan i's points in the
-/// world frame (read by the caller: files, memory), each integrated (the points within the
-/// tile's crop) or counted (TilePlan::reaches); then the mesh of the cubes the tile owns, in the
-/// world frame. `summary`, when given, gets the tile's counts and times.
+/// A scan of a plan's sequence: `scan(i, no_return)` gives scan i as a cloud in the world frame
+/// (its intensities, when it has them, reach the mesh) and fills the directions (world) of its
+/// rays that returned nothing (Reconstructor::integrate), when carving takes them. fuse_tiles
+/// calls it in increasing order of i, one call at a time, on a thread of its own (the next scan
+/// is read while one is fused).
+using TileScans = std::function<PointCloud(std::size_t, std::vector<Eigen::Vector3f>&)>;
+/// What fuse_tiles hands over of each tile: its key, its mesh (world frame) and its summary.
+using TileDone = std::function<void(const TileKey&, Mesh&&, const ReconstructionSummary&)>;
+
+/// What a pass over the scans for several tiles cost besides the tiles' own work.
+struct TilePassStats {
+    std::size_t scans_read = 0;  ///< scans read (those that reach one of the tiles), each once
+    std::size_t most_open = 0;   ///< the most tiles fused at the same time
+    double seconds_read = 0;     ///< reading the scans (`scan`)
+    double seconds_image = 0;    ///< their range images, one per scan for all the tiles it reaches
+};
+
+/// Fuses and meshes `tiles` of `plan` in one pass over the scans, in order: a scan is read once
+/// (the next one while this one is fused) and seen as one range image (map/range_image.hpp) for every tile it reaches, integrated into
+/// each (the points within the tile's crop) or counted (TilePlan::reaches). A tile is opened at the
+/// first scan that reaches it and, after its last one, meshed (mesh_tile), handed to `done` and
+/// freed; a tile no scan reaches is handed over empty first. Memory holds the tiles open at once,
+/// those whose scans interleave. Each tile's mesh is the one it has in the map fused whole.
+/// Throws ResourceLimit when the open tiles' maps together outgrow config.max_memory_mb.
+TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, const TileScans& scan, const TileDone& done);
+
+/// Fuses and meshes one tile of `plan` (fuse_tiles of that tile alone): `scan(i)` gives scan i's
+/// points in the world frame (read by the caller: files, memory). `summary`, when given, gets
+/// the tile's counts and times.
 Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<std::vector<Eigen::Vector3d>(std::size_t)>& scan,
                ReconstructionSummary* summary = nullptr);
-/// The same, `scan(i, no_return)` giving scan i as a cloud (world frame; its intensities, when
-/// it has them, reach the mesh) and the directions (world) of its rays that returned nothing
-/// (Reconstructor::integrate).
-Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const std::function<PointCloud(std::size_t, std::vector<Eigen::Vector3f>&)>& scan,
-               ReconstructionSummary* summary = nullptr);
+/// The same with a TileScans source.
+Mesh fuse_tile(const TilePlan& plan, const TileKey& tile, const TileScans& scan, ReconstructionSummary* summary = nullptr);
 
 /// The mesh of the cubes `tile` owns, from `rec`'s grid (world frame), which must hold every point
 /// of the tile's dependency box that `plan`'s scans have: the tile's own Reconstructor
