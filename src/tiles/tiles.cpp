@@ -168,26 +168,29 @@ TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, c
         std::unique_ptr<Reconstructor> rec;
     };
     std::vector<Tile> open;  // every tile some scan reaches, until it is meshed
-    for (const TileKey& key : tiles) {
-        Tile t{key, plan.scan_count(), 0, plan.crop(key), nullptr};
-        for (std::size_t i = 0; i < plan.scan_count(); ++i)
-            if (plan.reaches(key, i)) t.first = std::min(t.first, i), t.last = i;
-        if (t.first == plan.scan_count()) done(key, Mesh{}, ReconstructionSummary{});
-        else open.push_back(std::move(t));
+    std::vector<std::size_t> needed;  // the scans some tile of the group takes, in order
+    {
+        std::vector<bool> wanted(plan.scan_count(), false);
+        for (const TileKey& key : tiles) {
+            Tile t{key, plan.scan_count(), 0, plan.crop(key), nullptr};
+            for (std::size_t i = 0; i < plan.scan_count(); ++i)
+                if (plan.reaches(key, i)) t.first = std::min(t.first, i), t.last = i, wanted[i] = true;
+            if (t.first == plan.scan_count()) done(key, Mesh{}, ReconstructionSummary{});
+            else open.push_back(std::move(t));
+        }
+        for (std::size_t i = 0; i < wanted.size(); ++i)
+            if (wanted[i]) needed.push_back(i);
     }
     TilePassStats stats;
     RangeImage image;
     Eigen::Vector3d origin = plan.grid_origin();
     const double budget = config.max_memory_mb * 1048576.0;
-    // The scans some tile of the group takes, each read once, the next one while this one is fused.
+    // Each needed scan read once, the next one on a thread of its own while this one is fused.
     struct Read {
         PointCloud cloud;
         std::vector<Eigen::Vector3f> no_return;
         double seconds = 0;
     };
-    std::vector<std::size_t> needed;
-    for (std::size_t i = 0; i < plan.scan_count(); ++i)
-        if (std::any_of(open.begin(), open.end(), [&](const Tile& t) { return plan.reaches(t.key, i); })) needed.push_back(i);
     const auto read = [&scan, &seconds_since](std::size_t i) {
         Read r;
         const auto t0 = Clock::now();
@@ -199,7 +202,7 @@ TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, c
     std::future<Read> reading;
     if (!needed.empty()) reading = std::async(std::launch::async, read, needed[next_read++]);
     for (std::size_t i = 0; i < plan.scan_count() && !open.empty(); ++i) {
-        bool wanted = false;
+        std::size_t opened = 0;
         for (Tile& t : open) {
             if (t.first > i) continue;
             if (!t.rec) {  // opened at its first scan: the ones before it are counted
@@ -207,10 +210,10 @@ TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, c
                 for (std::size_t k = 0; k < i; ++k) t.rec->skip_scan();
                 origin = t.rec->grid().origin();  // the lattice point every tile's grid takes
             }
-            wanted = wanted || plan.reaches(t.key, i);
+            ++opened;
         }
-        stats.most_open = std::max(stats.most_open, static_cast<std::size_t>(std::count_if(open.begin(), open.end(), [](const Tile& t) { return t.rec != nullptr; })));
-        if (!wanted) {
+        stats.most_open = std::max(stats.most_open, opened);
+        if (next_read == 0 || needed[next_read - 1] != i) {  // no tile of the group takes scan i
             for (Tile& t : open)
                 if (t.rec) t.rec->skip_scan();
             continue;
