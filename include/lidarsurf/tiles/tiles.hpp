@@ -141,10 +141,11 @@ struct TilePassStats {
 };
 
 /// Fuses and meshes `tiles` of `plan` in one pass over the scans, in order: a scan is read once
-/// (the next one while this one is fused) and seen as one range image (map/range_image.hpp) for every tile it reaches, integrated into
-/// each (the points within the tile's crop) or counted (TilePlan::reaches). A tile is opened at the
-/// first scan that reaches it and, after its last one, meshed (mesh_tile), handed to `done` and
-/// freed; a tile no scan reaches is handed over empty first. Memory holds the tiles open at once,
+/// (the next one while this one is fused) and seen as one range image (map/range_image.hpp) for
+/// every tile it reaches, integrated into each (the points within the tile's crop) or counted
+/// (TilePlan::reaches). A tile is opened at the first scan that reaches it and, after its last
+/// one, meshed (mesh_tile), handed to `done` and freed; a tile no scan reaches is handed over
+/// empty first. Memory holds the tiles open at once,
 /// those whose scans interleave. Each tile's mesh is the one it has in the map fused whole.
 /// Throws ResourceLimit when the open tiles' maps together outgrow config.max_memory_mb.
 TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, const TileScans& scan, const TileDone& done);
