@@ -57,7 +57,6 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
         points += s.points_read - s.points_dropped;
         voxels += s.voxels;
         carved += s.carved_voxels;
-        estimate = std::max(estimate, s.memory_estimate);
         insert_s += s.seconds_insert, carve_s += s.seconds_carve, tsdf_s += s.seconds_tsdf, mesh_s += s.seconds_mesh;
         per_tile.push_back({{"x", key.x},
                             {"y", key.y},
@@ -79,6 +78,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
         pass.most_open = std::max(pass.most_open, p.most_open);
         pass.seconds_read += p.seconds_read;
         pass.seconds_image += p.seconds_image;
+        estimate = std::max(estimate, p.memory_estimate);
         nlohmann::json keys = nlohmann::json::array();
         for (const TileKey& k : group) keys.push_back({k.x, k.y});
         // What a Dask task of this group does: its pass, without the writing into the one output.
@@ -93,7 +93,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     std::fprintf(report,
                  "%s: %zu frames fused in %zu tiles of %g m (%s, poses from %s); mesh %llu vertices %llu triangles; "
                  "plan %.1f s, tiles %.1f s (read %.1f, range images %.1f, insert %.1f, carving %.1f, tsdf %.1f, mesh %.1f), write %.1f s; "
-                 "memory estimate %.0f MiB (largest tile, %zu tiles at once), peak resident %.0f MiB -> %s\n",
+                 "memory estimate %.0f MiB (largest group, %zu tiles at once), peak resident %.0f MiB -> %s\n",
                  in.name().c_str(), in.scans.size(), plan.tiles().size(), o.tiles.tile_size, method_name(m).c_str(), in.layout().c_str(),
                  static_cast<unsigned long long>(writer.vertices()), static_cast<unsigned long long>(writer.triangles()), plan_s,
                  total_s - plan_s - write_s, pass.seconds_read, pass.seconds_image, insert_s, carve_s, tsdf_s, mesh_s, write_s,

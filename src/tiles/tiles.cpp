@@ -238,10 +238,15 @@ TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, c
             else t.rec->integrate(cloud.points, viewpoint, t.crop, no_return, cloud.intensities);
             held += t.rec->map_bytes();
         }
-        if (static_cast<double>(kProcessBaselineBytes + held + image.memory_bytes()) > budget) {
+        // The scan, the one read ahead (about as large) and the image beside the open tiles' maps.
+        const std::size_t scan_bytes = 2 * (cloud.points.capacity() * sizeof(Eigen::Vector3d) + cloud.intensities.capacity() * sizeof(float) +
+                                            no_return.capacity() * sizeof(Eigen::Vector3f));
+        const std::size_t fusing = kProcessBaselineBytes + held + image.memory_bytes() + scan_bytes;
+        stats.memory_estimate = std::max(stats.memory_estimate, fusing);
+        if (static_cast<double>(fusing) > budget) {
             char buf[200];
             std::snprintf(buf, sizeof buf, "the tiles fused at once would need about %.0f MiB, above the memory budget of %.0f MiB",
-                          static_cast<double>(kProcessBaselineBytes + held + image.memory_bytes()) / 1048576.0, config.max_memory_mb);
+                          static_cast<double>(fusing) / 1048576.0, config.max_memory_mb);
             throw ResourceLimit(std::string(buf) + "; use smaller tiles or groups (tile_size, group; CLI --tile-size, --tile-group) or raise the budget (max_memory_mb, CLI --max-memory)");
         }
         for (auto it = open.begin(); it != open.end();) {
@@ -251,6 +256,12 @@ TilePassStats fuse_tiles(const TilePlan& plan, std::span<const TileKey> tiles, c
             }
             Mesh mesh = mesh_tile(*it->rec, plan, it->key);
             const ReconstructionSummary summary = it->rec->summary();
+            // Its extraction (the summary's estimate: the baseline, its map and the extraction)
+            // beside the other open tiles' maps and the scans in hand.
+            std::size_t others = image.memory_bytes() + scan_bytes;
+            for (const Tile& t : open)
+                if (t.rec && &t != &*it) others += t.rec->map_bytes();
+            stats.memory_estimate = std::max(stats.memory_estimate, summary.memory_estimate + others);
             const TileKey key = it->key;
             it = open.erase(it);  // the tile's grid is freed before the next one is handed over
             done(key, std::move(mesh), summary);

@@ -138,6 +138,9 @@ struct TilePassStats {
     std::size_t most_open = 0;   ///< the most tiles fused at the same time
     double seconds_read = 0;     ///< reading the scans (`scan`)
     double seconds_image = 0;    ///< their range images, one per scan for all the tiles it reaches
+    /// Bytes: the most the pass held at once by the estimates (kProcessBaselineBytes, the open
+    /// tiles' maps, the scans in hand and their image; a tile's extraction beside the others).
+    std::size_t memory_estimate = 0;
 };
 
 /// Fuses and meshes `tiles` of `plan` in one pass over the scans, in order: a scan is read once
