@@ -46,7 +46,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
     MeshStreamWriter writer(o.output, in.format, needs_double_coordinates(plan.bounds()));
     SeamWelder welder(plan);
     nlohmann::json per_tile = nlohmann::json::array();
-    std::size_t points = 0, voxels = 0, carved = 0, estimate = 0;
+    std::size_t points = 0, voxels = 0, carved = 0;
     double insert_s = 0, carve_s = 0, tsdf_s = 0, mesh_s = 0, write_s = 0;
     Progress progress("fuse", "tiles", plan.tiles().size(), o.quiet);
     std::size_t done = 0;
@@ -63,7 +63,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                             {"scans", plan.scans_of(key)},
                             {"voxels", s.voxels},
                             {"triangles", part.triangles.size()},
-                            {"ms", 1e3 * (s.seconds_insert + s.seconds_carve + s.seconds_tsdf + s.seconds_mesh)},
+                            {"ms", 1e3 * s.seconds_total()},
                             {"memory_estimate_mib", static_cast<double>(s.memory_estimate) / 1048576.0},
                             {"resident_mib", resident_mib()}});
         progress.update(++done, std::to_string(writer.triangles()) + " triangles");
@@ -74,11 +74,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
         const auto g0 = std::chrono::steady_clock::now();
         const double written_before = write_s;
         const TilePassStats p = fuse_tiles(plan, group, read_scan, append);
-        pass.scans_read += p.scans_read;
-        pass.most_open = std::max(pass.most_open, p.most_open);
-        pass.seconds_read += p.seconds_read;
-        pass.seconds_image += p.seconds_image;
-        estimate = std::max(estimate, p.memory_estimate);
+        pass.add(p);
         nlohmann::json keys = nlohmann::json::array();
         for (const TileKey& k : group) keys.push_back({k.x, k.y});
         // What a Dask task of this group does: its pass, without the writing into the one output.
@@ -97,7 +93,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                  in.name().c_str(), in.scans.size(), plan.tiles().size(), o.tiles.tile_size, method_name(m).c_str(), in.layout().c_str(),
                  static_cast<unsigned long long>(writer.vertices()), static_cast<unsigned long long>(writer.triangles()), plan_s,
                  total_s - plan_s - write_s, pass.seconds_read, pass.seconds_image, insert_s, carve_s, tsdf_s, mesh_s, write_s,
-                 static_cast<double>(estimate) / 1048576.0, pass.most_open, peak_resident_mib(), o.output.c_str());
+                 static_cast<double>(pass.memory_estimate) / 1048576.0, pass.most_open, peak_resident_mib(), o.output.c_str());
     if (!o.json.empty()) {
         nlohmann::json j = fuse_report_head(in, m);
         j.update({{"tile_size", o.tiles.tile_size},
@@ -110,7 +106,7 @@ int run_fuse_tiles(const FuseOptions& o, const Method& m, const FuseInput& in) {
                   {"points_integrated", points},
                   {"voxels", voxels},
                   {"carved_voxels", carved},
-                  {"memory_estimate_mib", static_cast<double>(estimate) / 1048576.0},
+                  {"memory_estimate_mib", static_cast<double>(pass.memory_estimate) / 1048576.0},
                   {"seam_vertices", welder.size()},
                   {"mesh_vertices", writer.vertices()},
                   {"mesh_triangles", writer.triangles()},

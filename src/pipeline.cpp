@@ -38,7 +38,7 @@ std::string ReconstructionSummary::to_string() const {
                   points_read, points_dropped, voxels, candidate_vertices, reused_vertices, defined_vertices, mesh_vertices, mesh_triangles,
                   static_cast<double>(memory_estimate) / 1048576.0,
                   1e3 * seconds_insert, 1e3 * seconds_tsdf, 1e3 * seconds_mesh,
-                  1e3 * (seconds_insert + seconds_carve + seconds_tsdf + seconds_mesh));
+                  1e3 * seconds_total());
     if (seconds_carve > 0 || carved_voxels > 0) {
         char carve[128];
         std::snprintf(carve, sizeof carve, "; carving %.1f ms, %zu voxels carved", 1e3 * seconds_carve, carved_voxels);

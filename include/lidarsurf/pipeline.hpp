@@ -39,6 +39,8 @@ struct ReconstructionSummary {
     std::size_t memory_estimate = 0;  ///< bytes: kProcessBaselineBytes, the map and estimate_extraction_bytes (the budget check)
     std::size_t carved_voxels = 0;  ///< voxels removed by free-space carving, over all scans
     double seconds_insert = 0, seconds_carve = 0, seconds_tsdf = 0, seconds_mesh = 0;
+    /// The fusion and extraction stages together: insert, carving, TSDF and mesh (seconds).
+    double seconds_total() const { return seconds_insert + seconds_carve + seconds_tsdf + seconds_mesh; }
     /// The TSDF stage by phase, for the fast path with seeded_surface (zero otherwise).
     SeededTiming tsdf_phases;
 

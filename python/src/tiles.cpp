@@ -148,7 +148,7 @@ py::dict tile_counts(std::size_t triangles, std::size_t vertices, const Reconstr
     out["vertices"] = vertices;
     out["voxels"] = s.voxels;
     out["carved_voxels"] = s.carved_voxels;
-    out["seconds"] = s.seconds_insert + s.seconds_carve + s.seconds_tsdf + s.seconds_mesh;
+    out["seconds"] = s.seconds_total();
     return out;
 }
 

@@ -21,6 +21,7 @@
 // A voxel beyond the crop whose own carving would have changed what a voxel inside reads is the
 // one thing a tile cannot see; tests/tiles/test_tiles.cpp compares the tiles with the whole map
 // on drives crossing several tiles.
+#include <algorithm>
 #include <array>
 #include <compare>
 #include <cstdint>
@@ -141,6 +142,15 @@ struct TilePassStats {
     /// Bytes: the most the pass held at once by the estimates (kProcessBaselineBytes, the open
     /// tiles' maps, the scans in hand and their image; a tile's extraction beside the others).
     std::size_t memory_estimate = 0;
+
+    /// Another pass's figures: counts and times summed, the most open and the estimate the larger.
+    void add(const TilePassStats& o) {
+        scans_read += o.scans_read;
+        most_open = std::max(most_open, o.most_open);
+        seconds_read += o.seconds_read;
+        seconds_image += o.seconds_image;
+        memory_estimate = std::max(memory_estimate, o.memory_estimate);
+    }
 };
 
 /// Fuses and meshes `tiles` of `plan` in one pass over the scans, in order: a scan is read once
